@@ -1,0 +1,38 @@
+#pragma once
+#include <array>
+#include <cstdint>
+#include <string_view>
+
+#include "rubble/settings.h"
+
+namespace rubble {
+
+/// The stages of a step, in data order. Only stages that exist are listed; later stages join this list.
+enum class Stage : std::uint8_t { IntegrateVelocities, IntegratePositions, Count };
+inline constexpr int kStageCount = static_cast<int>(Stage::Count);
+
+/// Stage name shared by the runner's table, the trace and the benchmark counters.
+std::string_view stageName(Stage s);
+
+struct StageTiming {
+    bool ran = false;
+    double beginUs = 0;  ///< microseconds since the world was created
+    double ms = 0;       ///< wall time of the stage
+};
+
+/// Timings and counts of one step.
+struct Profile {
+    std::uint64_t stepIndex = 0;
+    double beginUs = 0;  ///< microseconds since the world was created
+    double stepMs = 0;
+    std::array<StageTiming, kStageCount> stages{};
+    EffectSet effects;              ///< effects that were simulated in this step
+    std::uint32_t bodyCount = 0;    ///< bodies in the world, static ones included
+    std::uint32_t movingCount = 0;  ///< dynamic and kinematic bodies
+    std::uint32_t frozenCount = 0;  ///< bodies frozen in this step because their state became non-finite
+
+    const StageTiming& operator[](Stage s) const { return stages[static_cast<int>(s)]; }
+    StageTiming& operator[](Stage s) { return stages[static_cast<int>(s)]; }
+};
+
+}  // namespace rubble

@@ -1,0 +1,67 @@
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+#include "rubble/math.h"
+
+namespace rubble {
+
+/// Physical effects a scene may call for. The step is assembled from the stages its effects need.
+enum class Effect : std::uint32_t {
+    Gravity = 1u << 0,
+    Rotation = 1u << 1,
+    Friction = 1u << 2,
+    Restitution = 1u << 3,
+    Joints = 1u << 4,
+    Sleeping = 1u << 5,
+    ContinuousCollision = 1u << 6,
+};
+inline constexpr int kEffectCount = 7;
+
+/// A set of effects (bit set over Effect).
+struct EffectSet {
+    std::uint32_t bits = 0;
+
+    constexpr bool has(Effect e) const { return (bits & static_cast<std::uint32_t>(e)) != 0; }
+    constexpr EffectSet with(Effect e) const { return {bits | static_cast<std::uint32_t>(e)}; }
+    constexpr EffectSet without(Effect e) const { return {bits & ~static_cast<std::uint32_t>(e)}; }
+    friend constexpr bool operator==(EffectSet a, EffectSet b) { return a.bits == b.bits; }
+
+    /// What a world simulates when the scene declares nothing: everything but continuous collision.
+    static constexpr EffectSet defaults() { return {0x3Fu}; }
+    static constexpr EffectSet all() { return {0x7Fu}; }
+};
+
+/// Name used in scene files and the profile ("gravity", "rotation", ...).
+std::string_view effectName(Effect e);
+/// Parses an effect name; empty if unknown.
+std::optional<Effect> effectFromName(std::string_view name);
+
+/// How motion is integrated over one step. Semi-implicit (symplectic) Euler is the default; the others exist
+/// to measure what accuracy costs.
+enum class Integrator : std::uint8_t { SemiImplicitEuler, ExplicitEuler, Verlet, RungeKutta4 };
+
+std::string_view integratorName(Integrator i);
+std::optional<Integrator> integratorFromName(std::string_view name);
+
+enum class BroadPhaseKind : std::uint8_t { Auto, SweepAndPrune, Grid };
+
+std::string_view broadPhaseName(BroadPhaseKind b);
+std::optional<BroadPhaseKind> broadPhaseFromName(std::string_view name);
+
+/// World-wide settings. Every knob that trades accuracy for time is here.
+struct WorldSettings {
+    Vec3 gravity{0, -9.81f, 0};
+    float timeStep = 1.0f / 60.0f;  ///< the fixed step the runner and runtime use, s
+    int substeps = 1;
+    int velocityIterations = 8;
+    int positionIterations = 2;
+    int threads = 0;  ///< size of the task arena; 0 = all hardware threads
+    Integrator integrator = Integrator::SemiImplicitEuler;
+    /// Effects the scene declares. The engine removes those the content cannot show (see World::activeEffects).
+    EffectSet effects = EffectSet::defaults();
+    BroadPhaseKind broadPhase = BroadPhaseKind::Auto;
+};
+
+}  // namespace rubble

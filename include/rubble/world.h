@@ -1,0 +1,105 @@
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "rubble/body.h"
+#include "rubble/id.h"
+#include "rubble/math.h"
+#include "rubble/profile.h"
+#include "rubble/settings.h"
+#include "rubble/shapes.h"
+
+namespace rubble {
+
+/// A physics world: shapes, bodies and the step that moves them.
+/// Every function that takes a BodyId or ShapeId throws rubble::Error when the handle is null, stale or from
+/// another world, and every setter refuses non-finite or out-of-range input the same way.
+class World {
+public:
+    explicit World(const WorldSettings& settings = {});
+    ~World();
+    World(const World&) = delete;
+    World& operator=(const World&) = delete;
+    World(World&&) noexcept;
+    World& operator=(World&&) noexcept;
+
+    /// Validates and builds a shape (convex hulls are computed here).
+    ShapeId createShape(const ShapeDef& def);
+    /// Removes a shape no body uses any more.
+    void destroyShape(ShapeId id);
+    bool isValid(ShapeId id) const;
+    /// Mass properties of the shape at unit density.
+    MassProperties shapeMassProperties(ShapeId id) const;
+
+    BodyId createBody(const BodyDef& def);
+    /// O(1); other bodies' handles stay valid.
+    void destroyBody(BodyId id);
+    bool isValid(BodyId id) const;
+    std::uint32_t bodyCount() const;
+    /// Handles of all bodies, in slot order (stable across steps).
+    std::vector<BodyId> bodies() const;
+
+    BodyType bodyType(BodyId id) const;
+    ShapeId bodyShape(BodyId id) const;
+    /// Pose of the shape's local origin.
+    Transform transform(BodyId id) const;
+    Vec3 position(BodyId id) const;
+    Quat orientation(BodyId id) const;
+    /// World position of the centre of mass.
+    Vec3 centerOfMass(BodyId id) const;
+    Vec3 linearVelocity(BodyId id) const;
+    Vec3 angularVelocity(BodyId id) const;
+    /// Mass properties of the body (zero mass for static and kinematic bodies); inertia in the body frame.
+    MassProperties massProperties(BodyId id) const;
+    Material material(BodyId id) const;
+    CollisionFilter filter(BodyId id) const;
+    std::uint64_t userData(BodyId id) const;
+    /// True when the body's state went non-finite and the world stopped simulating it.
+    bool isFrozen(BodyId id) const;
+
+    void setTransform(BodyId id, Vec3 position, Quat orientation);
+    void setLinearVelocity(BodyId id, Vec3 v);
+    void setAngularVelocity(BodyId id, Vec3 w);
+    void setMaterial(BodyId id, const Material& m);  ///< density changes the mass of a dynamic body
+    void setFilter(BodyId id, CollisionFilter f);
+    void setUserData(BodyId id, std::uint64_t data);
+
+    /// Forces and torques accumulate until the next step, which applies and clears them. Dynamic bodies only
+    /// respond; on other bodies they are ignored.
+    void addForce(BodyId id, Vec3 force);
+    void addTorque(BodyId id, Vec3 torque);
+    void addForceAtPoint(BodyId id, Vec3 force, Vec3 worldPoint);
+    /// Impulses change velocity at once.
+    void applyLinearImpulse(BodyId id, Vec3 impulse);
+    void applyAngularImpulse(BodyId id, Vec3 impulse);
+    void applyImpulseAtPoint(BodyId id, Vec3 impulse, Vec3 worldPoint);
+
+    /// Advances the world by dt seconds (dt > 0 and finite).
+    void step(float dt);
+
+    const WorldSettings& settings() const;
+    /// Changes settings between steps (thread count included).
+    void setSettings(const WorldSettings& settings);
+    /// Effects simulated by the next step: the declared ones less those the world's content cannot show.
+    EffectSet activeEffects() const;
+    const Profile& lastProfile() const;
+    std::uint64_t stepCount() const;
+
+    /// Bodies frozen because their state went non-finite, since the last call.
+    std::vector<BodyId> takeFrozenBodies();
+
+    /// 64-bit hash of the state of every body (pose and velocities, bit for bit), in slot order.
+    std::uint64_t stateHash() const;
+
+    /// Height of the highest static mesh or heightfield surface straight below or above (x, z), if any.
+    /// Used for the scenes' tunnelling figure.
+    bool terrainHeightAt(float x, float z, float& height) const;
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rubble

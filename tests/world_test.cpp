@@ -1,0 +1,285 @@
+// World API: handles across add/remove churn (against a brute-force model), validation of bad input, the state
+// hash, and the frame of the step.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <random>
+
+#include "body_storage.h"
+#include "rubble/error.h"
+#include "rubble/world.h"
+
+using namespace rubble;
+
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+/// Runs `f` and returns the message of the rubble::Error it throws (fails the test if it throws none).
+template <class F>
+std::string errorOf(F&& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "expected a rubble::Error";
+    return {};
+}
+
+BodyDef dynamicBox(ShapeId shape, Vec3 position) {
+    BodyDef def;
+    def.shape = shape;
+    def.position = position;
+    return def;
+}
+
+}  // namespace
+
+TEST(WorldHandles, SurviveChurnAgainstAModel) {
+    World world;
+    const ShapeId box = world.createShape(BoxDef{{0.5f, 0.5f, 0.5f}});
+    std::mt19937 rng(7);
+    std::map<std::uint64_t, std::pair<BodyId, std::uint64_t>> model;  // user data -> (handle, user data)
+    std::vector<BodyId> dead;
+    std::uint64_t next = 1;
+    for (int round = 0; round < 20000; ++round) {
+        const bool add = model.empty() || rng() % 100 < 55;
+        if (add) {
+            BodyDef def = dynamicBox(box, {float(next % 100), float(next / 100 % 100), 0});
+            def.userData = next;
+            def.type = next % 3 == 0 ? BodyType::Static : (next % 3 == 1 ? BodyType::Dynamic : BodyType::Kinematic);
+            model[next] = {world.createBody(def), next};
+            ++next;
+        } else {
+            auto it = model.begin();
+            std::advance(it, rng() % model.size());
+            world.destroyBody(it->second.first);
+            dead.push_back(it->second.first);
+            model.erase(it);
+        }
+    }
+    ASSERT_EQ(world.bodyCount(), model.size());
+    for (const auto& [data, entry] : model) {
+        ASSERT_TRUE(world.isValid(entry.first));
+        ASSERT_EQ(world.userData(entry.first), data);
+        const Vec3 p = world.position(entry.first);
+        ASSERT_EQ(p.x, float(data % 100));
+        ASSERT_EQ(p.y, float(data / 100 % 100));
+    }
+    for (BodyId id : dead) {
+        ASSERT_FALSE(world.isValid(id));
+        EXPECT_NE(errorOf([&] { world.position(id); }).find("stale"), std::string::npos);
+    }
+    EXPECT_EQ(world.bodies().size(), model.size());
+}
+
+TEST(WorldHandles, NullAndForeignHandlesAreRefused) {
+    World world;
+    EXPECT_NE(errorOf([&] { world.position(BodyId{}); }).find("null"), std::string::npos);
+    EXPECT_NE(errorOf([&] {
+                  world.position(BodyId{12345, 1});
+              }).find("stale or not from this world"),
+              std::string::npos);
+    EXPECT_NE(errorOf([&] { world.createBody(BodyDef{}); }).find("shape handle is null"), std::string::npos);
+}
+
+TEST(WorldValidation, RefusesBadBodyDefinitions) {
+    World world;
+    const ShapeId box = world.createShape(BoxDef{});
+    struct Case {
+        const char* expected;
+        void (*edit)(BodyDef&);
+    };
+    const Case cases[] = {
+        {"BodyDef.position is not finite", [](BodyDef& d) { d.position.y = kNaN; }},
+        {"BodyDef.position is not finite", [](BodyDef& d) { d.position.x = kInf; }},
+        {"BodyDef.orientation is not a unit quaternion",
+         [](BodyDef& d) {
+             d.orientation = {0, 0, 0, 2};
+         }},
+        {"BodyDef.orientation is not finite", [](BodyDef& d) { d.orientation.w = kNaN; }},
+        {"BodyDef.linearVelocity is not finite", [](BodyDef& d) { d.linearVelocity.z = kInf; }},
+        {"BodyDef.angularVelocity is not finite", [](BodyDef& d) { d.angularVelocity.z = kNaN; }},
+        {"material.friction must be >= 0", [](BodyDef& d) { d.material.friction = -0.1f; }},
+        {"material.restitution must be in [0, 1]", [](BodyDef& d) { d.material.restitution = 1.5f; }},
+        {"material.density must be > 0", [](BodyDef& d) { d.material.density = 0; }},
+        {"BodyDef.linearDamping must be >= 0", [](BodyDef& d) { d.linearDamping = -1; }},
+        {"BodyDef.gravityScale is not finite", [](BodyDef& d) { d.gravityScale = kNaN; }},
+        {"a static body cannot have a velocity",
+         [](BodyDef& d) {
+             d.type = BodyType::Static, d.linearVelocity = {1, 0, 0};
+         }},
+    };
+    for (const Case& c : cases) {
+        BodyDef def = dynamicBox(box, {});
+        c.edit(def);
+        const std::string message = errorOf([&] { world.createBody(def); });
+        EXPECT_NE(message.find(c.expected), std::string::npos) << message;
+        EXPECT_NE(message.find("World::createBody"), std::string::npos) << message;
+    }
+    EXPECT_EQ(world.bodyCount(), 0u) << "refused bodies must leave nothing behind";
+}
+
+TEST(WorldValidation, RefusesBadCallsOnBodies) {
+    World world;
+    const BodyId body = world.createBody(dynamicBox(world.createShape(BoxDef{}), {}));
+    EXPECT_NE(errorOf([&] { world.addForce(body, {kNaN, 0, 0}); }).find("force is not finite"), std::string::npos);
+    EXPECT_NE(errorOf([&] {
+                  world.setTransform(body, {}, {1, 1, 0, 0});
+              }).find("not a unit quaternion"),
+              std::string::npos);
+    EXPECT_NE(errorOf([&] { world.step(0); }).find("dt must be finite and > 0"), std::string::npos);
+    EXPECT_NE(errorOf([&] { world.step(kNaN); }).find("dt must be finite and > 0"), std::string::npos);
+    WorldSettings bad;
+    bad.substeps = 0;
+    EXPECT_NE(errorOf([&] { world.setSettings(bad); }).find("substeps must be in [1, 64]"), std::string::npos);
+    EXPECT_NE(errorOf([&] { World w(WorldSettings{.threads = -2}); }).find("threads"), std::string::npos);
+}
+
+TEST(WorldValidation, MeshesAreStaticOnly) {
+    World world;
+    TriangleMeshDef mesh;
+    mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 0, 1}};
+    mesh.indices = {0, 2, 1};
+    const ShapeId shape = world.createShape(mesh);
+    BodyDef def;
+    def.shape = shape;
+    EXPECT_NE(errorOf([&] { world.createBody(def); }).find("static-only"), std::string::npos);
+    def.type = BodyType::Static;
+    EXPECT_TRUE(world.isValid(world.createBody(def)));
+    EXPECT_NE(errorOf([&] { world.destroyShape(shape); }).find("still used by 1 bodies"), std::string::npos);
+}
+
+TEST(WorldBodies, OriginAndCentreOfMassStayApartForOffsetShapes) {
+    // A compound whose mass sits off its origin: the body reports its origin where it was placed and its centre
+    // of mass where the compound's centre of mass lies.
+    World world;
+    CompoundDef compound;
+    compound.children.push_back({BoxDef{{0.5f, 0.5f, 0.5f}}, Transform{{2, 0, 0}, {}}});
+    const ShapeId shape = world.createShape(compound);
+    BodyDef def;
+    def.shape = shape;
+    def.position = {1, 2, 3};
+    def.orientation = Quat::fromAxisAngle({0, 1, 0}, 3.14159265f / 2);
+    const BodyId id = world.createBody(def);
+    const Vec3 p = world.position(id);
+    EXPECT_NEAR(p.x, 1, 1e-6);
+    EXPECT_NEAR(p.y, 2, 1e-6);
+    EXPECT_NEAR(p.z, 3, 1e-6);
+    const Vec3 c = world.centerOfMass(id);  // local (2,0,0) turned 90 degrees about y is (0,0,-2)
+    EXPECT_NEAR(c.x, 1, 1e-5);
+    EXPECT_NEAR(c.z, 1, 1e-5);
+    EXPECT_NEAR(world.massProperties(id).mass, 1000.0f, 1e-2);
+}
+
+TEST(WorldBodies, ForcesReachOnlyDynamicBodies) {
+    World world(WorldSettings{.gravity = {0, 0, 0}});
+    const ShapeId box = world.createShape(BoxDef{});
+    BodyDef def = dynamicBox(box, {});
+    const BodyId dynamic = world.createBody(def);
+    def.type = BodyType::Kinematic;
+    def.linearVelocity = {1, 0, 0};
+    const BodyId kinematic = world.createBody(def);
+    world.applyLinearImpulse(dynamic, {1000, 0, 0});  // 1 m/s on 1000 kg
+    world.applyLinearImpulse(kinematic, {1000, 0, 0});
+    EXPECT_FLOAT_EQ(world.linearVelocity(dynamic).x, 1.0f);
+    EXPECT_FLOAT_EQ(world.linearVelocity(kinematic).x, 1.0f);
+    world.step(0.5f);
+    EXPECT_FLOAT_EQ(world.position(dynamic).x, 0.5f);
+    EXPECT_FLOAT_EQ(world.position(kinematic).x, 0.5f);
+}
+
+TEST(WorldStep, ProfileListsTheStagesThatRan) {
+    World world;
+    const ShapeId ball = world.createShape(SphereDef{0.5f});
+    world.createBody(dynamicBox(ball, {0, 10, 0}));
+    world.step(1.0f / 60);
+    const Profile& p = world.lastProfile();
+    EXPECT_TRUE(p[Stage::IntegrateVelocities].ran);
+    EXPECT_TRUE(p[Stage::IntegratePositions].ran);
+    EXPECT_EQ(p.bodyCount, 1u);
+    EXPECT_GT(p.stepMs, 0.0);
+    EXPECT_EQ(world.stepCount(), 1u);
+
+    // Frictionless spheres in zero gravity: nothing changes velocities, so that stage does not run.
+    World still(WorldSettings{.gravity = {0, 0, 0}});
+    const ShapeId s = still.createShape(SphereDef{0.5f});
+    BodyDef def = dynamicBox(s, {});
+    def.material.friction = 0;
+    def.linearVelocity = {1, 0, 0};
+    still.createBody(def);
+    still.step(1.0f / 60);
+    EXPECT_FALSE(still.lastProfile()[Stage::IntegrateVelocities].ran);
+    EXPECT_TRUE(still.lastProfile()[Stage::IntegratePositions].ran);
+}
+
+TEST(WorldStep, StateHashIsTheSameForOneAndTwoThreads) {
+    auto run = [](int threads) {
+        World world(WorldSettings{.threads = threads});
+        const ShapeId box = world.createShape(BoxDef{{0.3f, 0.2f, 0.5f}});
+        std::mt19937 rng(3);
+        std::uniform_real_distribution<float> u(-5, 5);
+        for (int i = 0; i < 20000; ++i) {
+            BodyDef def = dynamicBox(box, {u(rng), u(rng), u(rng)});
+            def.linearVelocity = {u(rng), u(rng), u(rng)};
+            def.angularVelocity = {u(rng), u(rng), u(rng)};
+            def.linearDamping = 0.1f;
+            world.createBody(def);
+        }
+        for (int s = 0; s < 30; ++s) world.step(1.0f / 60);
+        return world.stateHash();
+    };
+    EXPECT_EQ(run(1), run(2));
+}
+
+TEST(WorldStep, StateHashSeesEveryBit) {
+    World world;
+    const BodyId id = world.createBody(dynamicBox(world.createShape(BoxDef{}), {1, 2, 3}));
+    const std::uint64_t before = world.stateHash();
+    world.setLinearVelocity(id, {0, 0, std::nextafter(0.0f, 1.0f)});
+    EXPECT_NE(world.stateHash(), before);
+}
+
+TEST(WorldStep, NonFiniteStateFreezesTheBodyAndReportsIt) {
+    World world(WorldSettings{.gravity = {0, 0, 0}});
+    const ShapeId box = world.createShape(BoxDef{});
+    const BodyId good = world.createBody(dynamicBox(box, {}));
+    const BodyId bad = world.createBody(dynamicBox(box, {5, 0, 0}));
+    // Each force is finite, but their sum is not: the velocity update overflows to infinity.
+    world.addForce(bad, {3e38f, 0, 0});
+    world.addForce(bad, {3e38f, 0, 0});
+    world.step(1.0f / 60);
+    EXPECT_TRUE(world.isFrozen(bad));
+    EXPECT_FALSE(world.isFrozen(good));
+    const std::vector<BodyId> frozen = world.takeFrozenBodies();
+    ASSERT_EQ(frozen.size(), 1u);
+    EXPECT_EQ(frozen[0], bad);
+    EXPECT_TRUE(isFinite(world.position(bad)));
+    EXPECT_EQ(world.position(bad).x, 5.0f);
+    EXPECT_EQ(world.lastProfile().frozenCount, 1u);
+}
+
+TEST(WorldHandles, StorageInvariantsHoldAfterChurn) {
+    // Reaches the storage directly: the slot map and the dense rows must agree after arbitrary churn.
+    rubble::detail::BodyStorage storage;
+    std::vector<BodyId> live;
+    std::mt19937 rng(11);
+    for (int i = 0; i < 5000; ++i) {
+        if (live.empty() || rng() % 3 != 0) {
+            std::uint32_t dense;
+            live.push_back(
+                storage.allocate(rng() % 2 ? rubble::detail::BodySet::Moving : rubble::detail::BodySet::Static, dense));
+        } else {
+            const std::size_t k = rng() % live.size();
+            storage.release(live[k]);
+            live[k] = live.back();
+            live.pop_back();
+        }
+    }
+    EXPECT_EQ(storage.checkInvariants(), "");
+    EXPECT_EQ(storage.count(), live.size());
+}
