@@ -1,0 +1,210 @@
+// buildShape: the one gate every ShapeDef passes before the engine sees it. Validation happens here so that no
+// later stage has to distrust a Shape; the heavy work (hulls, mesh grids, mass integration) lives in the
+// neighbouring files.
+#include "shapes/shape.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
+
+#include "rubble/error.h"
+
+namespace rubble::detail {
+
+std::string formatNumber(double value) {
+    // Default stream formatting keeps messages short ("-1", "0.5") and spells non-finite values out.
+    std::ostringstream out;
+    out << value;
+    return out.str();
+}
+
+std::string formatVec(Vec3 v) {
+    std::ostringstream out;
+    out << '(' << v.x << ", " << v.y << ", " << v.z << ')';
+    return out.str();
+}
+
+namespace {
+
+[[noreturn]] void fail(const char* def, const std::string& what) { throw Error(std::string(def) + ": " + what); }
+
+void requireFinite(const char* def, const char* field, float value) {
+    if (!std::isfinite(value)) fail(def, std::string(field) + " is not finite (" + formatNumber(value) + ")");
+}
+
+void requirePositive(const char* def, const char* field, float value) {
+    requireFinite(def, field, value);
+    if (!(value > 0)) fail(def, std::string(field) + " must be > 0 (got " + formatNumber(value) + ")");
+}
+
+Aabb emptyAabb() {
+    const float inf = std::numeric_limits<float>::infinity();
+    return {{inf, inf, inf}, {-inf, -inf, -inf}};
+}
+
+void grow(Aabb& box, Vec3 p) {
+    box.min = {std::min(box.min.x, p.x), std::min(box.min.y, p.y), std::min(box.min.z, p.z)};
+    box.max = {std::max(box.max.x, p.x), std::max(box.max.y, p.y), std::max(box.max.z, p.z)};
+}
+
+// Bounds of a compound child in the compound frame. Each kind uses its exact extreme points, so compounds do not
+// carry the slack of rotating a box around a box.
+Aabb childBounds(const Shape& child, const Transform& t) {
+    Aabb box = emptyAabb();
+    switch (child.kind) {
+        case ShapeKind::Sphere: {
+            const Vec3 r{child.radius, child.radius, child.radius};
+            box = {t.position - r, t.position + r};
+            break;
+        }
+        case ShapeKind::Capsule: {
+            const Vec3 r{child.radius, child.radius, child.radius};
+            for (float s : {-1.0f, 1.0f}) {
+                const Vec3 end = apply(t, {0, s * child.halfHeight, 0});
+                grow(box, end - r);
+                grow(box, end + r);
+            }
+            break;
+        }
+        case ShapeKind::Box:
+            for (int i = 0; i < 8; ++i) {
+                const Vec3 h = child.halfExtents;
+                grow(box, apply(t, {i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z}));
+            }
+            break;
+        case ShapeKind::ConvexHull:
+            for (Vec3 v : child.hull->vertices) grow(box, apply(t, v));
+            break;
+        default:
+            break;  // compounds never hold compounds, meshes or heightfields
+    }
+    return box;
+}
+
+struct Builder {
+    Shape operator()(const SphereDef& def) const {
+        requirePositive("SphereDef", "radius", def.radius);
+        Shape s;
+        s.kind = ShapeKind::Sphere;
+        s.radius = def.radius;
+        const Vec3 r{def.radius, def.radius, def.radius};
+        s.localBounds = {-r, r};
+        return s;
+    }
+
+    Shape operator()(const BoxDef& def) const {
+        requirePositive("BoxDef", "halfExtents.x", def.halfExtents.x);
+        requirePositive("BoxDef", "halfExtents.y", def.halfExtents.y);
+        requirePositive("BoxDef", "halfExtents.z", def.halfExtents.z);
+        Shape s;
+        s.kind = ShapeKind::Box;
+        s.halfExtents = def.halfExtents;
+        s.localBounds = {-def.halfExtents, def.halfExtents};
+        return s;
+    }
+
+    Shape operator()(const CapsuleDef& def) const {
+        requirePositive("CapsuleDef", "radius", def.radius);
+        requireFinite("CapsuleDef", "halfHeight", def.halfHeight);
+        // A zero half-height is a sphere written as a capsule; allowed so tools can shrink capsules freely.
+        if (!(def.halfHeight >= 0))
+            fail("CapsuleDef", "halfHeight must be >= 0 (got " + formatNumber(def.halfHeight) + ")");
+        Shape s;
+        s.kind = ShapeKind::Capsule;
+        s.radius = def.radius;
+        s.halfHeight = def.halfHeight;
+        const Vec3 e{def.radius, def.radius + def.halfHeight, def.radius};
+        s.localBounds = {-e, e};
+        return s;
+    }
+
+    Shape operator()(const ConvexHullDef& def) const {
+        Shape s;
+        s.kind = ShapeKind::ConvexHull;
+        auto hull = std::make_shared<ConvexHull>(buildConvexHull(def.points));
+        s.localBounds = emptyAabb();
+        for (Vec3 v : hull->vertices) grow(s.localBounds, v);
+        s.hull = std::move(hull);
+        return s;
+    }
+
+    Shape operator()(const CompoundDef& def) const {
+        if (def.children.empty()) fail("CompoundDef", "children is empty: a compound needs at least one child");
+        Shape s;
+        s.kind = ShapeKind::Compound;
+        s.localBounds = emptyAabb();
+        for (std::size_t i = 0; i < def.children.size(); ++i) {
+            const CompoundChildDef& c = def.children[i];
+            const std::string where = "CompoundDef: children[" + std::to_string(i) + "]";
+            Shape child;
+            try {
+                child = std::visit(*this, c.shape);
+            } catch (const Error& e) {
+                throw Error(where + ": " + e.what());
+            }
+            if (!isFinite(c.local.position))
+                throw Error(where + ": local.position is not finite " + formatVec(c.local.position));
+            const Quat q = c.local.rotation;
+            if (!isFinite(q))
+                throw Error(where + ": local.rotation is not finite (" + formatNumber(q.x) + ", " + formatNumber(q.y) +
+                            ", " + formatNumber(q.z) + ", " + formatNumber(q.w) + ")");
+            const double len = std::sqrt(double(q.x) * q.x + double(q.y) * q.y + double(q.z) * q.z + double(q.w) * q.w);
+            if (!(len > 1e-6)) throw Error(where + ": local.rotation is a zero quaternion: it must be a rotation");
+            // Hand-typed or parsed quaternions are rarely exactly unit; normalising is harmless, while leaving
+            // them would scale the child.
+            Transform local = c.local;
+            local.rotation = {float(q.x / len), float(q.y / len), float(q.z / len), float(q.w / len)};
+            child.unitMass = unitMassProperties(child);
+            const Aabb b = childBounds(child, local);
+            grow(s.localBounds, b.min);
+            grow(s.localBounds, b.max);
+            s.children.push_back({std::make_shared<const Shape>(std::move(child)), local});
+        }
+        return s;
+    }
+
+    Shape operator()(const TriangleMeshDef& def) const {
+        Shape s;
+        s.kind = ShapeKind::TriangleMesh;
+        auto mesh = std::make_shared<TriangleMesh>(buildTriangleMesh(def));
+        s.localBounds = mesh->bounds;
+        s.mesh = std::move(mesh);
+        return s;
+    }
+
+    Shape operator()(const HeightfieldDef& def) const {
+        Shape s;
+        s.kind = ShapeKind::Heightfield;
+        auto field = std::make_shared<Heightfield>(buildHeightfield(def));
+        Aabb b = emptyAabb();
+        for (float h : field->heights) {
+            b.min.y = std::min(b.min.y, h);
+            b.max.y = std::max(b.max.y, h);
+        }
+        b.min.x = 0;
+        b.min.z = 0;
+        b.max.x = float(field->columns - 1) * field->spacingX;
+        b.max.z = float(field->rows - 1) * field->spacingZ;
+        s.localBounds = b;
+        s.heightfield = std::move(field);
+        return s;
+    }
+};
+
+}  // namespace
+
+Shape buildShape(const ShapeDef& def) {
+    Shape s = std::visit(Builder{}, def);
+    s.unitMass = unitMassProperties(s);
+    return s;
+}
+
+std::optional<float> surfaceHeightAt(const Shape& shape, float x, float z) {
+    if (shape.kind == ShapeKind::TriangleMesh && shape.mesh) return meshHeightAt(*shape.mesh, x, z);
+    if (shape.kind == ShapeKind::Heightfield && shape.heightfield) return heightfieldHeightAt(*shape.heightfield, x, z);
+    return std::nullopt;
+}
+
+}  // namespace rubble::detail
