@@ -1,0 +1,248 @@
+// rubble: the command-line runner. Loads a scene, steps it and prints what each stage cost.
+#include <unistd.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rubble/build_info.h"
+#include "rubble/error.h"
+#include "rubble/scene.h"
+#include "rubble/world.h"
+#include "trace_writer.h"
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: rubble run [SCENE] [--steps N] [--threads T] [--profile] [--trace FILE] [--hash]\n"
+    "\n"
+    "  SCENE         scene file (JSON); default: the standard scene S1, scenes/s1_pyramid.json\n"
+    "  --steps N     number of steps (default: the scene's own)\n"
+    "  --threads T   worker threads (default: the scene's setting; 0 = all cores)\n"
+    "  --profile     print the per-stage table (median ms per step and share of the step)\n"
+    "  --trace FILE  write a Chrome trace-event JSON file (open it in Perfetto or chrome://tracing)\n"
+    "  --hash        print a hash of the final state of all bodies\n";
+
+struct Options {
+    std::string scene;
+    long steps = -1;
+    int threads = -1;
+    bool profile = false;
+    bool hash = false;
+    std::string trace;
+};
+
+[[noreturn]] void usageError(const std::string& message) {
+    std::fprintf(stderr, "rubble: %s\n\n%s", message.c_str(), kUsage);
+    std::exit(2);
+}
+
+long parseCount(std::string_view flag, const char* text, long min, long max) {
+    long value = 0;
+    const char* end = text + std::strlen(text);
+    const auto [ptr, ec] = std::from_chars(text, end, value);
+    if (ec != std::errc{} || ptr != end || value < min || value > max)
+        usageError(std::string(flag) + " takes a whole number in [" + std::to_string(min) + ", " + std::to_string(max) +
+                   "], not '" + text + "'");
+    return value;
+}
+
+std::string defaultScene() {
+    const char* candidates[] = {"scenes/s1_pyramid.json", RUBBLE_SCENES_DIR "/s1_pyramid.json"};
+    for (const char* path : candidates)
+        if (access(path, R_OK) == 0) return path;
+    return candidates[0];
+}
+
+Options parseOptions(int argc, char** argv) {
+    if (argc < 2) usageError("missing command");
+    const std::string_view command = argv[1];
+    if (command == "--help" || command == "-h" || command == "help") {
+        std::fputs(kUsage, stdout);
+        std::exit(0);
+    }
+    if (command != "run") usageError("unknown command '" + std::string(command) + "'");
+    Options o;
+    for (int i = 2; i < argc; ++i) {
+        const std::string_view a = argv[i];
+        auto value = [&]() -> const char* {
+            if (i + 1 >= argc) usageError(std::string(a) + " needs a value");
+            return argv[++i];
+        };
+        if (a == "--steps")
+            o.steps = parseCount(a, value(), 0, 100'000'000);
+        else if (a == "--threads")
+            o.threads = static_cast<int>(parseCount(a, value(), 0, 1024));
+        else if (a == "--profile")
+            o.profile = true;
+        else if (a == "--hash")
+            o.hash = true;
+        else if (a == "--trace")
+            o.trace = value();
+        else if (a == "--help" || a == "-h") {
+            std::fputs(kUsage, stdout);
+            std::exit(0);
+        } else if (!a.empty() && a[0] == '-')
+            usageError("unknown option '" + std::string(a) + "'");
+        else if (o.scene.empty())
+            o.scene = std::string(a);
+        else
+            usageError("more than one scene given ('" + o.scene + "' and '" + std::string(a) + "')");
+    }
+    if (o.scene.empty()) o.scene = defaultScene();
+    return o;
+}
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0;
+    const std::size_t mid = v.size() / 2;
+    std::nth_element(v.begin(), v.begin() + mid, v.end());
+    if (v.size() % 2) return v[mid];
+    return 0.5 * (v[mid] + *std::max_element(v.begin(), v.begin() + mid));
+}
+
+/// A one-line progress bar on stderr, only when stderr is a terminal.
+class ProgressBar {
+public:
+    explicit ProgressBar(long total) : total_(total), enabled_(isatty(STDERR_FILENO) && total >= 50) {}
+    void update(long done) {
+        if (!enabled_) return;
+        const int width = 40;
+        const int filled = static_cast<int>(width * done / total_);
+        if (filled == last_ && done != total_) return;
+        last_ = filled;
+        std::fprintf(stderr, "\r[%.*s%*s] %ld/%ld steps", filled, "########################################",
+                     width - filled, "", done, total_);
+        if (done == total_) std::fputs("\r\033[K", stderr);
+        std::fflush(stderr);
+    }
+
+private:
+    long total_;
+    bool enabled_;
+    int last_ = -1;
+};
+
+std::string effectList(rubble::EffectSet set) {
+    std::string out;
+    for (int b = 0; b < rubble::kEffectCount; ++b) {
+        const auto e = static_cast<rubble::Effect>(1u << b);
+        if (!set.has(e)) continue;
+        if (!out.empty()) out += ", ";
+        out += rubble::effectName(e);
+    }
+    return out.empty() ? "none" : out;
+}
+
+int run(const Options& options) {
+    rubble::Scene scene = rubble::loadScene(options.scene);
+    if (options.threads >= 0) scene.settings.threads = options.threads;
+    const long steps = options.steps >= 0 ? options.steps : scene.steps;
+
+    rubble::World world(scene.settings);
+    const std::vector<rubble::BodyId> ids = rubble::instantiate(scene, world);
+
+    std::vector<rubble::BodyId> dynamicIds;
+    std::vector<rubble::Vec3> starts;
+    for (rubble::BodyId id : ids) {
+        if (world.bodyType(id) != rubble::BodyType::Dynamic) continue;
+        dynamicIds.push_back(id);
+        starts.push_back(world.centerOfMass(id));
+    }
+
+    const rubble::BuildInfo build = rubble::buildInfo();
+    std::printf("scene      %s (%s)\n", scene.name.c_str(), options.scene.c_str());
+    std::printf("bodies     %u (%zu dynamic)\n", world.bodyCount(), dynamicIds.size());
+    std::printf("steps      %ld of %.6g s, %d substep(s), integrator %s\n", steps, scene.settings.timeStep,
+                scene.settings.substeps, std::string(rubble::integratorName(scene.settings.integrator)).c_str());
+    std::printf("threads    %d%s, SIMD %s (%d float lanes)\n", scene.settings.threads,
+                scene.settings.threads == 0 ? " (all cores)" : "", build.instructionSet, build.floatLanes);
+    std::printf("effects    declared: %s\n           simulated: %s\n", effectList(scene.settings.effects).c_str(),
+                effectList(world.activeEffects()).c_str());
+
+    std::vector<std::vector<double>> stageMs(rubble::kStageCount);
+    std::vector<double> stepMs;
+    stepMs.reserve(static_cast<std::size_t>(steps));
+    TraceWriter trace;
+    ProgressBar progress(steps);
+    std::uint32_t frozen = 0;
+    for (long s = 0; s < steps; ++s) {
+        world.step(scene.settings.timeStep);
+        const rubble::Profile& p = world.lastProfile();
+        stepMs.push_back(p.stepMs);
+        for (int k = 0; k < rubble::kStageCount; ++k)
+            if (p.stages[k].ran) stageMs[k].push_back(p.stages[k].ms);
+        if (!options.trace.empty()) trace.addStep(p);
+        for (rubble::BodyId id : world.takeFrozenBodies()) {
+            if (frozen++ < 10)
+                std::fprintf(stderr, "warning: body %u froze at step %ld: its state became non-finite\n", id.index, s);
+        }
+        progress.update(s + 1);
+    }
+    if (frozen > 10) std::fprintf(stderr, "warning: %u bodies froze in all\n", frozen);
+
+    const double stepMedian = median(stepMs);
+    if (options.profile) {
+        std::printf("\n%-22s %8s %12s %8s\n", "stage", "ran", "median ms", "share");
+        for (int k = 0; k < rubble::kStageCount; ++k) {
+            const auto stage = static_cast<rubble::Stage>(k);
+            const double m = median(stageMs[k]);
+            std::printf("%-22s %8zu %12.4f %7.1f%%\n", std::string(rubble::stageName(stage)).c_str(), stageMs[k].size(),
+                        m, stepMedian > 0 ? 100.0 * m / stepMedian : 0.0);
+        }
+        std::printf("%-22s %8zu %12.4f %7.1f%%\n", "step", stepMs.size(), stepMedian, 100.0);
+        std::printf("\ncounts     bodies %u, moving %u; pairs and contacts: no collision stages yet\n",
+                    world.bodyCount(), world.lastProfile().movingCount);
+        std::printf(
+            "note       broad phase, narrow phase and solver are not built yet, so bodies fall through the\n"
+            "           ground and terrain; the figures below show it.\n");
+    } else {
+        std::printf("\nstep       median %.4f ms over %zu steps\n", stepMedian, stepMs.size());
+    }
+
+    std::printf("\n");
+    for (rubble::SceneFigure figure : scene.figures) {
+        if (figure == rubble::SceneFigure::MaxDisplacement) {
+            double largest = 0;
+            for (std::size_t i = 0; i < dynamicIds.size(); ++i) {
+                const rubble::Vec3 d = world.centerOfMass(dynamicIds[i]) - starts[i];
+                largest = std::max(largest, static_cast<double>(rubble::length(d)));
+            }
+            std::printf("figure     largest displacement from start: %.4f m\n", largest);
+        } else if (figure == rubble::SceneFigure::Tunnelled) {
+            std::size_t tunnelled = 0;
+            for (rubble::BodyId id : dynamicIds) {
+                const rubble::Vec3 c = world.centerOfMass(id);
+                float h = 0;
+                if (world.terrainHeightAt(c.x, c.z, h) && c.y < h - 0.5f) ++tunnelled;
+            }
+            std::printf("figure     bodies tunnelled through the terrain: %zu of %zu\n", tunnelled, dynamicIds.size());
+        }
+    }
+    if (options.hash) std::printf("state hash %016llx\n", static_cast<unsigned long long>(world.stateHash()));
+    if (!options.trace.empty()) {
+        trace.write(options.trace);
+        std::printf("trace      %s (%zu events)\n", options.trace.c_str(), trace.eventCount());
+    }
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    const Options options = parseOptions(argc, argv);
+    try {
+        return run(options);
+    } catch (const rubble::Error& e) {
+        std::fprintf(stderr, "rubble: %s\n", e.what());
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "rubble: unexpected error: %s\n", e.what());
+        return 1;
+    }
+}
