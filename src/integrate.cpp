@@ -121,12 +121,16 @@ struct VelocityInputs {
 };
 
 template <class F>
-VelocityInputs<F> loadVelocityInputs(const MovingBodies& b, std::size_t i) {
+VelocityInputs<F> loadVelocityInputs(const MovingBodies& b, bool forces, std::size_t i) {
     VelocityInputs<F> in;
     in.v = load3<F>(b.vx, b.vy, b.vz, i);
     in.w = load3<F>(b.wx, b.wy, b.wz, i);
-    in.f = load3<F>(b.fx, b.fy, b.fz, i);
-    in.t = load3<F>(b.tx, b.ty, b.tz, i);
+    if (forces) {
+        in.f = load3<F>(b.fx, b.fy, b.fz, i);
+        in.t = load3<F>(b.tx, b.ty, b.tz, i);
+    } else {
+        in.f = in.t = Vec3W<F>::zero();
+    }
     in.q = QuatW<F>::load(b.qx.data(), b.qy.data(), b.qz.data(), b.qw.data(), i);
     in.ir = QuatW<F>::load(b.irx.data(), b.iry.data(), b.irz.data(), b.irw.data(), i);
     in.invI = load3<F>(b.invIx, b.invIy, b.invIz, i);
@@ -270,7 +274,7 @@ VelocityResult<F> rk4Velocities(const VelocityInputs<F>& in, const Vec3W<F>& gra
 template <class F, Integrator I>
 [[gnu::flatten]] MaskOf<F> velocityKernel(MovingBodies& b, const IntegrationParams& params, IntegrationScratch& s,
                                           std::size_t i) {
-    const VelocityInputs<F> in = loadVelocityInputs<F>(b, i);
+    const VelocityInputs<F> in = loadVelocityInputs<F>(b, params.forces, i);
     const F dt(params.dt);
     const Vec3W<F> gravity = Vec3W<F>::broadcast(params.gravity.x, params.gravity.y, params.gravity.z);
 
@@ -291,8 +295,10 @@ template <class F, Integrator I>
     const Vec3W<F> zero = Vec3W<F>::zero();
     store3(b.vx, b.vy, b.vz, i, select(ok, r.v, in.v));
     store3(b.wx, b.wy, b.wz, i, select(ok, r.w, in.w));
-    store3(b.fx, b.fy, b.fz, i, select(ok, zero, in.f));
-    store3(b.tx, b.ty, b.tz, i, select(ok, zero, in.t));
+    if (params.forces && params.clearForces) {
+        store3(b.fx, b.fy, b.fz, i, select(ok, zero, in.f));
+        store3(b.tx, b.ty, b.tz, i, select(ok, zero, in.t));
+    }
     const SymMat3W<F> iwOld =
         SymMat3W<F>::load(b.iwXX.data(), b.iwYY.data(), b.iwZZ.data(), b.iwXY.data(), b.iwXZ.data(), b.iwYZ.data(), i);
     select(ok, iw, iwOld)

@@ -18,6 +18,12 @@ struct IntegrationParams {
     Vec3 gravity;          ///< zero when the Gravity effect is off
     bool rotation = true;  ///< false when the Rotation effect is off: angular motion is not integrated
     Integrator integrator = Integrator::SemiImplicitEuler;
+    /// The force and torque accumulators may be non-zero. When false they are neither read nor cleared, which
+    /// saves a sixth of the stage's memory traffic in the common case of gravity alone.
+    bool forces = true;
+    /// Clear the accumulators after use. With substeps, forces act over every substep and are cleared after the
+    /// last one.
+    bool clearForces = true;
 };
 
 /// Per-body state carried from integrateVelocities to integratePositions for the non-default integrators.

@@ -200,12 +200,12 @@ struct World::Impl {
             m.invIx[i] = m.invIy[i] = m.invIz[i] = 0;
             m.irx[i] = m.iry[i] = m.irz[i] = 0, m.irw[i] = 1;
         } else {
-            const MassProperties mp = detail::scaleMass(shape.unitMass, m.density[i]);
-            const detail::PrincipalInertia pi = detail::principalAxes(mp.inertia);
-            m.invMass[i] = 1.0f / mp.mass;
-            m.invIx[i] = pi.moments.x > 0 ? 1.0f / pi.moments.x : 0.0f;
-            m.invIy[i] = pi.moments.y > 0 ? 1.0f / pi.moments.y : 0.0f;
-            m.invIz[i] = pi.moments.z > 0 ? 1.0f / pi.moments.z : 0.0f;
+            const float density = m.density[i];
+            const detail::PrincipalInertia& pi = shape.unitPrincipal;
+            m.invMass[i] = 1.0f / (shape.unitMass.mass * density);
+            m.invIx[i] = pi.moments.x > 0 ? 1.0f / (pi.moments.x * density) : 0.0f;
+            m.invIy[i] = pi.moments.y > 0 ? 1.0f / (pi.moments.y * density) : 0.0f;
+            m.invIz[i] = pi.moments.z > 0 ? 1.0f / (pi.moments.z * density) : 0.0f;
             m.irx[i] = pi.rotation.x, m.iry[i] = pi.rotation.y, m.irz[i] = pi.rotation.z, m.irw[i] = pi.rotation.w;
         }
         refreshWorldInertia(i);
@@ -656,6 +656,8 @@ void World::step(float dt) {
                                   w.anyDamping || params.integrator != Integrator::SemiImplicitEuler;
 
     for (int sub = 0; sub < substeps; ++sub) {
+        params.forces = w.forcesPending;
+        params.clearForces = sub == substeps - 1;
         if (velocitiesChange) {
             detail::StageTimer timer(profile, Stage::IntegrateVelocities, w.origin);
             detail::integrateVelocities(w.bodies.moving, params, w.integrationScratch, *w.pool, w.nonFinite);
@@ -666,9 +668,8 @@ void World::step(float dt) {
             detail::integratePositions(w.bodies.moving, params, w.integrationScratch, *w.pool, w.nonFinite);
         }
         w.freezeReported();
-        // Forces are applied over the first substep's velocity update only, then the accumulators are empty.
-        w.forcesPending = false;
     }
+    w.forcesPending = false;
 
 #if RUBBLE_VALIDATE
     if (const std::string problem = w.bodies.checkInvariants(); !problem.empty())

@@ -198,6 +198,7 @@ struct Builder {
 Shape buildShape(const ShapeDef& def) {
     Shape s = std::visit(Builder{}, def);
     s.unitMass = unitMassProperties(s);
+    if (!s.staticOnly()) s.unitPrincipal = principalAxes(s.unitMass.inertia);
     return s;
 }
 

@@ -47,6 +47,12 @@ struct Heightfield {
     float spacingX = 1, spacingZ = 1;
 };
 
+/// Principal moments and the rotation that takes the principal frame to the shape frame:
+/// inertia = R diag(moments) R^T. R is a proper rotation.
+struct PrincipalInertia {
+    Vec3 moments;
+    Quat rotation;
+};
 struct Shape;
 
 struct CompoundChild {
@@ -66,6 +72,8 @@ struct Shape {
 
     Aabb localBounds;         ///< bounds in the local frame
     MassProperties unitMass;  ///< at density 1; zero for static-only shapes
+    /// Principal axes of unitMass.inertia, computed once: density scales the moments, never the axes.
+    PrincipalInertia unitPrincipal;
     bool staticOnly() const { return kind == ShapeKind::TriangleMesh || kind == ShapeKind::Heightfield; }
 };
 
@@ -76,12 +84,6 @@ Shape buildShape(const ShapeDef& def);
 /// Mass properties scaled from unit density.
 MassProperties scaleMass(const MassProperties& unit, float density);
 
-/// Principal moments and the rotation that takes the principal frame to the shape frame:
-/// inertia = R diag(moments) R^T. R is a proper rotation.
-struct PrincipalInertia {
-    Vec3 moments;
-    Quat rotation;
-};
 PrincipalInertia principalAxes(const Mat3& inertia);
 
 /// Height (local y) of the highest surface of a triangle mesh or heightfield at local (x, z); empty when
