@@ -13,6 +13,7 @@
 #include "rubble/error.h"
 #include "rubble/scene.h"
 #include "rubble/world.h"
+#include "support/error_of.h"
 
 namespace rubble {
 namespace {
@@ -20,20 +21,7 @@ namespace {
 const std::string kData = std::string(RUBBLE_TEST_DATA_DIR) + "/scenes/";
 const std::string kScenes = std::string(RUBBLE_SOURCE_DIR) + "/scenes/";
 
-/// The message of the Error that `f` throws ("" and a test failure if it throws nothing or something else).
-template <class F>
-std::string errorOf(F&& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    } catch (const std::exception& e) {
-        ADD_FAILURE() << "threw a non-rubble exception: " << e.what();
-        return {};
-    }
-    ADD_FAILURE() << "accepted";
-    return {};
-}
+using test::errorOf;
 
 void expectAll(const std::string& message, const std::vector<std::string>& parts) {
     for (const std::string& p : parts)

@@ -12,6 +12,7 @@
 #include "body_storage.h"
 #include "rubble/error.h"
 #include "rubble/world.h"
+#include "support/error_of.h"
 
 using namespace rubble;
 
@@ -20,17 +21,7 @@ namespace {
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-/// Runs `f` and returns the message of the rubble::Error it throws (fails the test if it throws none).
-template <class F>
-std::string errorOf(F&& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    ADD_FAILURE() << "expected a rubble::Error";
-    return {};
-}
+using rubble::test::errorOf;
 
 BodyDef dynamicBox(ShapeId shape, Vec3 position) {
     BodyDef def;
