@@ -1,0 +1,169 @@
+#include "bounds.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "parallel.h"
+#include "simd/simd.h"
+#include "simd/vec.h"
+
+namespace rubble::detail {
+namespace {
+
+using simd::FloatW;
+using simd::Vec3W;
+
+constexpr std::size_t kChunkSize = 8192;
+static_assert(kChunkSize % simd::kLanes == 0, "chunks must hold whole batches");
+
+Aabb transformedBox(const Aabb& local, const Transform& pose) {
+    const Vec3 center = (local.min + local.max) * 0.5f, half = (local.max - local.min) * 0.5f;
+    const Vec3 c = apply(pose, center);
+    const Vec3 ax = rotate(pose.rotation, {1, 0, 0}), ay = rotate(pose.rotation, {0, 1, 0}),
+               az = rotate(pose.rotation, {0, 0, 1});
+    const Vec3 e{std::fabs(ax.x) * half.x + std::fabs(ay.x) * half.y + std::fabs(az.x) * half.z,
+                 std::fabs(ax.y) * half.x + std::fabs(ay.y) * half.y + std::fabs(az.y) * half.z,
+                 std::fabs(ax.z) * half.x + std::fabs(ay.z) * half.y + std::fabs(az.z) * half.z};
+    return {c - e, c + e};
+}
+
+Aabb pointsBounds(const std::vector<Vec3>& points, const Transform& pose) {
+    Aabb box{apply(pose, points.front()), apply(pose, points.front())};
+    for (const Vec3& p : points) {
+        const Vec3 w = apply(pose, p);
+        box.min = {std::min(box.min.x, w.x), std::min(box.min.y, w.y), std::min(box.min.z, w.z)};
+        box.max = {std::max(box.max.x, w.x), std::max(box.max.y, w.y), std::max(box.max.z, w.z)};
+    }
+    return box;
+}
+
+Aabb merge(const Aabb& a, const Aabb& b) {
+    return {{std::min(a.min.x, b.min.x), std::min(a.min.y, b.min.y), std::min(a.min.z, b.min.z)},
+            {std::max(a.max.x, b.max.x), std::max(a.max.y, b.max.y), std::max(a.max.z, b.max.z)}};
+}
+
+Transform compose(const Transform& outer, const Transform& inner) {
+    return {apply(outer, inner.position), outer.rotation * inner.rotation};
+}
+
+/// Boxes of the bodies [i, i + lanes), written once for any lane type.
+template <class F>
+void boundsKernel(const MovingBodies& b, const ShapeBoundsTable& s, const BoundsParams& params, Bounds& out,
+                  std::size_t i) {
+    using Int = simd::IntOf<F>;
+    const Int shape = simd::loadIndex<Int>(b.shape.data() + i);
+    const Vec3W<F> localCenter{simd::gather(s.centerX.data(), shape), simd::gather(s.centerY.data(), shape),
+                               simd::gather(s.centerZ.data(), shape)};
+    const Vec3W<F> half{simd::gather(s.halfX.data(), shape), simd::gather(s.halfY.data(), shape),
+                        simd::gather(s.halfZ.data(), shape)};
+    const F radius = simd::gather(s.radius.data(), shape);
+
+    const Vec3W<F> com = Vec3W<F>::load(b.px.data(), b.py.data(), b.pz.data(), i);
+    const simd::QuatW<F> q = simd::QuatW<F>::load(b.qx.data(), b.qy.data(), b.qz.data(), b.qw.data(), i);
+    const simd::Mat3W<F> r = simd::rotationMatrix(q);
+    const Vec3W<F> center = r * localCenter + com;
+    const F margin(params.margin);
+    Vec3W<F> extent;
+    extent.x = simd::min(simd::abs(r.m[0][0]) * half.x + simd::abs(r.m[0][1]) * half.y + simd::abs(r.m[0][2]) * half.z,
+                         radius) +
+               margin;
+    extent.y = simd::min(simd::abs(r.m[1][0]) * half.x + simd::abs(r.m[1][1]) * half.y + simd::abs(r.m[1][2]) * half.z,
+                         radius) +
+               margin;
+    extent.z = simd::min(simd::abs(r.m[2][0]) * half.x + simd::abs(r.m[2][1]) * half.y + simd::abs(r.m[2][2]) * half.z,
+                         radius) +
+               margin;
+    const Vec3W<F> sweep = Vec3W<F>::load(b.vx.data(), b.vy.data(), b.vz.data(), i) * F(params.dt);
+    const Vec3W<F> zero = Vec3W<F>::zero();
+    const Vec3W<F> lo = center - extent + simd::min(sweep, zero);
+    const Vec3W<F> hi = center + extent + simd::max(sweep, zero);
+    lo.store(out.minX.data(), out.minY.data(), out.minZ.data(), i);
+    hi.store(out.maxX.data(), out.maxY.data(), out.maxZ.data(), i);
+}
+
+}  // namespace
+
+ShapeBoundsInfo shapeBoundsInfo(const Shape& shape) {
+    const Aabb& box = shape.localBounds;
+    const Vec3 center = (box.min + box.max) * 0.5f, half = (box.max - box.min) * 0.5f;
+    const Vec3 relative = center - shape.unitMass.centerOfMass;
+    float radius = length(half);  // the box's own bounding sphere; tighter for round shapes below
+    switch (shape.kind) {
+        case ShapeKind::Sphere:
+            radius = shape.radius;
+            break;
+        case ShapeKind::Capsule:
+            radius = shape.radius + shape.halfHeight;
+            break;
+        case ShapeKind::ConvexHull: {
+            float r2 = 0;
+            for (const Vec3& v : shape.hull->vertices) r2 = std::max(r2, dot(v - center, v - center));
+            radius = std::sqrt(r2);
+            break;
+        }
+        default:
+            break;
+    }
+    // Rounding in the kernel's rotation must not shrink a box below the shape: pad by a few ulps of the size.
+    const float pad = 4e-7f * (length(half) + length(relative));
+    return {relative.x, relative.y, relative.z, half.x + pad, half.y + pad, half.z + pad, radius + pad};
+}
+
+void ShapeBoundsTable::set(std::uint32_t shape, const ShapeBoundsInfo& info) {
+    if (shape >= centerX.size())
+        for (auto* a : {&centerX, &centerY, &centerZ, &halfX, &halfY, &halfZ, &radius}) a->resize(shape + 1);
+    centerX[shape] = info.centerX, centerY[shape] = info.centerY, centerZ[shape] = info.centerZ;
+    halfX[shape] = info.halfX, halfY[shape] = info.halfY, halfZ[shape] = info.halfZ;
+    radius[shape] = info.radius;
+}
+
+void updateBounds(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,
+                  TaskPool& pool, Bounds& out) {
+    const std::size_t n = bodies.size();
+    out.resize(n);
+    pool.forChunks(n, kChunkSize, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        std::size_t i = begin;
+        for (const std::size_t wideEnd = begin + simd::roundDownToLanes<FloatW>(end - begin); i < wideEnd;
+             i += simd::kLanes)
+            boundsKernel<FloatW>(bodies, shapes, params, out, i);
+        for (; i < end; ++i) boundsKernel<float>(bodies, shapes, params, out, i);
+    });
+}
+
+void updateBoundsScalar(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,
+                        Bounds& out) {
+    out.resize(bodies.size());
+    for (std::size_t i = 0; i < bodies.size(); ++i) boundsKernel<float>(bodies, shapes, params, out, i);
+}
+
+Aabb worldBounds(const Shape& shape, const Transform& pose) {
+    switch (shape.kind) {
+        case ShapeKind::Sphere: {
+            const Vec3 r{shape.radius, shape.radius, shape.radius};
+            return {pose.position - r, pose.position + r};
+        }
+        case ShapeKind::Capsule: {
+            const Vec3 axis = rotate(pose.rotation, {0, shape.halfHeight, 0});
+            const Vec3 r{shape.radius, shape.radius, shape.radius};
+            const Vec3 a = pose.position + axis, b = pose.position - axis;
+            return {Vec3{std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)} - r,
+                    Vec3{std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)} + r};
+        }
+        case ShapeKind::ConvexHull:
+            return pointsBounds(shape.hull->vertices, pose);
+        case ShapeKind::TriangleMesh:
+            return pointsBounds(shape.mesh->vertices, pose);
+        case ShapeKind::Compound: {
+            Aabb box = worldBounds(*shape.children.front().shape, compose(pose, shape.children.front().local));
+            for (const CompoundChild& child : shape.children)
+                box = merge(box, worldBounds(*child.shape, compose(pose, child.local)));
+            return box;
+        }
+        case ShapeKind::Box:
+        case ShapeKind::Heightfield:
+            break;
+    }
+    return transformedBox(shape.localBounds, pose);
+}
+
+}  // namespace rubble::detail
