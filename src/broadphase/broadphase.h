@@ -1,0 +1,78 @@
+#pragma once
+// Broad phase: from the fattened AABBs of the moving bodies and the static set to a duplicate-free list of
+// candidate pairs. Moving-moving pairs come from sweep-and-prune or the multi-resolution grid; moving-static pairs
+// (static bodies and the triangles of static meshes and heightfields) from the static BVH. Static-static pairs
+// never exist. The final lists are in a canonical order that does not depend on the algorithm or thread count.
+#include <cstdint>
+#include <vector>
+
+#include "aligned_vector.h"
+
+namespace rubble::detail {
+
+/// Axis-aligned boxes in SoA form, indexed by dense body index.
+struct Bounds {
+    AlignedVector<float> minX, minY, minZ, maxX, maxY, maxZ;
+
+    std::uint32_t size() const { return static_cast<std::uint32_t>(minX.size()); }
+    void resize(std::size_t n) {
+        for (auto* a : {&minX, &minY, &minZ, &maxX, &maxY, &maxZ}) a->resize(n);
+    }
+};
+
+/// The one overlap predicate of the broad phase: closed intervals, so touching boxes overlap.
+inline bool overlaps(const Bounds& a, std::uint32_t i, const Bounds& b, std::uint32_t j) {
+    return a.minX[i] <= b.maxX[j] && b.minX[j] <= a.maxX[i] && a.minY[i] <= b.maxY[j] && b.minY[j] <= a.maxY[i] &&
+           a.minZ[i] <= b.maxZ[j] && b.minZ[j] <= a.maxZ[i];
+}
+
+/// A candidate pair. Moving-moving: dense indices of two moving bodies with a < b. Moving-static: a is a moving
+/// body's dense index, b a static body's dense index.
+struct BodyPair {
+    std::uint32_t a = 0;
+    std::uint32_t b = 0;
+    friend bool operator==(BodyPair x, BodyPair y) { return x.a == y.a && x.b == y.b; }
+    friend bool operator<(BodyPair x, BodyPair y) { return x.a != y.a ? x.a < y.a : x.b < y.b; }
+};
+
+/// A moving body against a static mesh or heightfield: the triangles whose boxes its box overlaps are
+/// meshTriangles[firstTriangle .. firstTriangle + triangleCount), ascending.
+struct MeshPair {
+    std::uint32_t moving = 0;
+    std::uint32_t staticBody = 0;  ///< dense index in StaticBodies
+    std::uint32_t firstTriangle = 0;
+    std::uint32_t triangleCount = 0;
+};
+
+/// Which pairs may become contacts: each body's category must be in the other's mask, and a pair of two sleeping
+/// bodies is skipped (a static body counts as sleeping). Null arrays mean "everything collides, nobody sleeps".
+struct PairFilter {
+    const std::uint32_t* category = nullptr;  ///< of moving bodies, dense order
+    const std::uint32_t* mask = nullptr;
+    const std::uint8_t* flags = nullptr;  ///< of moving bodies; `asleepBit` set means asleep
+    std::uint8_t asleepBit = 0;
+
+    bool asleep(std::uint32_t i) const { return flags != nullptr && (flags[i] & asleepBit) != 0; }
+    bool accepts(std::uint32_t a, std::uint32_t b) const {
+        if (category != nullptr && ((category[a] & mask[b]) == 0 || (category[b] & mask[a]) == 0)) return false;
+        return !(asleep(a) && asleep(b));
+    }
+};
+
+/// The broad phase's output.
+struct CandidatePairs {
+    std::vector<BodyPair> moving;  ///< sorted by (a, b)
+    /// Moving vs static bodies whose shape is not a mesh or heightfield, ordered by (a, static body slot).
+    std::vector<BodyPair> statics;
+    std::vector<MeshPair> meshes;  ///< ordered by (moving, static body slot)
+    std::vector<std::uint32_t> meshTriangles;
+
+    void clear() {
+        moving.clear();
+        statics.clear();
+        meshes.clear();
+        meshTriangles.clear();
+    }
+};
+
+}  // namespace rubble::detail
