@@ -1,0 +1,124 @@
+#pragma once
+// Multi-resolution grid broad phase (Millington's multi-resolution map, Mirtich's hierarchical hash grid).
+//
+// Levels whose cell sizes grow by a fixed ratio hold the bodies; each body lives in the one level whose cell size
+// is the smallest that is not below its largest extent, in the cell that holds its centre. Two bodies of one level
+// can then only overlap if their cells are neighbours, and a body can only overlap a coarser body whose centre lies
+// within half a coarse cell of its box. A step:
+//   1. one parallel pass finds the size range and the origin (smallest centre), which fix the levels;
+//   2. a parallel pass packs every body's (level, z, y, x) cell into a key, coordinates relative to the origin, so
+//      the world needs no bounds, and copies its box into one 32-byte record (so that step 4 misses the cache
+//      once per body rather than once per bound, when the bounds outgrow the cache);
+//   3. the shared parallel radix sort orders (key << indexBits | index) words: cells become runs of slots, rows
+//      (level, z, y) runs of cells;
+//   4. the boxes are gathered into that order, so every inner loop reads contiguous SoA lanes;
+//   5. same-level pairs come from the row itself and its four forward rows (y + 1; and y - 1 .. y + 1 at z + 1: the
+//      half-neighbourhood, each pair of neighbouring rows is visited from exactly one side), restricted to cells
+//      x - 1 .. x + 1. Almost every cell holds one body in sparse scenes, so the work is organised per row, not
+//      per cell: the z + 1 rows have consecutive keys and so are one contiguous run of slots, as are the rest of
+//      the own row and the y + 1 row; a run shorter than one SIMD batch per row is tested whole (the exact test
+//      discards the cells outside x - 1 .. x + 1), a longer one row by row through forward-moving x windows. The
+//      forward rows are found by one cursor that only moves forward as rows are walked in key order;
+//   6. pairs with coarser levels come from an open-addressing hash table (cell key -> slot range) over the coarse
+//      cells, probed with each fine cell's box grown by half a coarse cell.
+// Every candidate is decided by the exact overlaps() predicate, so the grid only ever costs time, never pairs.
+// Work is split in chunks whose bounds depend only on counts, and chunk outputs are concatenated in chunk order,
+// so the result does not depend on the thread count.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "aligned_vector.h"
+#include "broadphase/broadphase.h"
+#include "broadphase/radix_sort.h"
+
+namespace rubble::detail {
+
+class TaskPool;
+
+class MultiResolutionGrid {
+public:
+    /// Levels cover sizes from the largest box down by factors of levelRatio, at most this many of them; boxes
+    /// smaller than the finest cell share it (still exact, only slower). 4^14 spans any sane size range.
+    static constexpr int kMaxLevels = 15;
+
+    /// levelRatio: growth of the cell size from one level to the next (clamped to >= 1.5).
+    explicit MultiResolutionGrid(float levelRatio = 4.0f);
+
+    /// Appends to `out` (cleared first) every pair a < b of boxes that overlap and that the filter accepts, each
+    /// once. Not sorted; identical for every thread count.
+    void findPairs(const Bounds& bounds, const PairFilter& filter, TaskPool& pool, std::vector<BodyPair>& out);
+
+    /// Levels that held at least one body in the last findPairs.
+    int levelCount() const { return occupiedLevelCount_; }
+    /// Cells that held at least one body in the last findPairs.
+    std::uint32_t cellCount() const { return cellCount_; }
+    /// Most bodies in one cell in the last findPairs (a measure of how well the levels fit the sizes).
+    std::uint32_t maxBodiesPerCell() const { return maxBodiesPerCell_; }
+    /// Cell size of the i-th occupied level (finest first), i < levelCount().
+    float levelCellSize(int i) const { return static_cast<float>(levelSize_[occupiedLevels_[i]]); }
+
+private:
+    /// What one chunk of bodies contributes to the level set-up (finite boxes only).
+    struct ChunkStats {
+        double centreMin[3];
+        double centreMax[3];
+        double extentMin;
+        double extentMax;
+        std::uint32_t outliers;  ///< boxes whose float centre or extent is not finite
+    };
+    /// What one chunk of rows found.
+    struct ChunkOutput {
+        std::vector<BodyPair> pairs;
+    };
+    /// Cell starts of one chunk of slots, for the cell statistics: runs that straddle chunks are joined afterwards.
+    struct CellRuns {
+        std::uint32_t cells = 0;   ///< cells starting in the chunk
+        std::uint32_t head = 0;    ///< slots before the first start (they continue the previous chunk's run)
+        std::uint32_t tail = 0;    ///< slots of the last run started in the chunk
+        std::uint32_t maxRun = 0;  ///< longest run started in the chunk, cut at its end
+    };
+    struct Layout;
+
+    void computeStats(const Bounds& bounds, TaskPool& pool);
+    void computeKeys(const Bounds& bounds, const Layout& layout, TaskPool& pool);
+    void gatherAndBuildRows(const Bounds& bounds, const Layout& layout, std::uint32_t validCount, TaskPool& pool);
+    void buildCoarseTable(const Layout& layout, std::uint32_t validCount);
+    void queryRows(const Layout& layout, const PairFilter& filter, TaskPool& pool);
+    void queryOutliers(std::uint32_t validCount, const PairFilter& filter, std::vector<BodyPair>& out) const;
+
+    double levelRatio_;
+
+    // Per-step level set-up (finest level first).
+    int levelTotal_ = 0;
+    std::array<double, kMaxLevels> levelSize_{};    ///< bound on the extent of the level's boxes
+    std::array<double, kMaxLevels> levelInvBin_{};  ///< 1 / binning cell size (slightly larger than levelSize_)
+    std::array<int, kMaxLevels> occupiedLevels_{};
+    std::array<std::uint32_t, kMaxLevels + 1> levelRowBegin_{};  ///< first row of each level, by level
+    int occupiedLevelCount_ = 0;
+    double origin_[3] = {0, 0, 0};
+
+    // Member buffers, reused every step so that a warmed-up grid does not allocate.
+    std::vector<ChunkStats> chunkStats_;
+    AlignedVector<float> boxes_;          ///< 8 floats per body (min xyz, max xyz, 2 unused), body order
+    AlignedVector<std::uint64_t> items_;  ///< key << indexBits | body, sorted
+    RadixSortScratch sortScratch_;
+    Bounds sorted_;                          ///< boxes in slot order, padded by a SIMD batch for tail loads
+    AlignedVector<std::uint32_t> slotBody_;  ///< body index of each slot
+    AlignedVector<std::uint32_t> slotX_;     ///< x cell of each slot
+    std::vector<std::uint32_t> chunkRowCount_;
+    std::vector<CellRuns> chunkCells_;
+    AlignedVector<std::uint64_t> rowKey_;     ///< (level, z, y) of each row, then sentinels
+    AlignedVector<std::uint32_t> rowBegin_;   ///< first slot of each row; rowBegin_[rowCount_] = valid slots
+    AlignedVector<std::uint64_t> tableKey_;   ///< coarse cell keys
+    AlignedVector<std::uint32_t> tableCell_;  ///< first and end slot of each coarse cell, two per table entry
+    std::uint64_t tableMask_ = 0;
+    int tableShift_ = 64;
+    std::vector<ChunkOutput> chunkOutputs_;
+
+    std::uint32_t rowCount_ = 0;
+    std::uint32_t cellCount_ = 0;
+    std::uint32_t maxBodiesPerCell_ = 0;
+};
+
+}  // namespace rubble::detail
