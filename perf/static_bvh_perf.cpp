@@ -1,0 +1,128 @@
+// Static BVH: build cost (once per scene, or when edits force a merge) and the per-step query of moving boxes
+// against static triangles, on S3's terrain (100 x 100 cells, y = 2 sin(x / 8) cos(z / 8), 20,000 triangles).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "broadphase/static_bvh.h"
+#include "parallel.h"
+#include "scene/generators.h"
+#include "shapes/shape.h"
+
+namespace {
+
+using namespace rubble;
+using namespace rubble::detail;
+
+/// Primitives of an S3-style terrain with cells x cells cells over [-50, 50]^2 (scaled up for larger counts, so
+/// the triangle size stays S3's).
+std::vector<StaticPrimitive> terrainPrimitives(std::uint32_t cells) {
+    scene_detail::TerrainParams p;
+    p.cells[0] = p.cells[1] = cells;
+    const double half = 50.0 * cells / 100.0;
+    p.min[0] = p.min[1] = -half;
+    p.max[0] = p.max[1] = half;
+    p.amplitude = 2;
+    p.wavelength[0] = p.wavelength[1] = 8;
+    const Shape shape = buildShape(scene_detail::generateTerrain(p));
+    std::vector<StaticPrimitive> prims;
+    appendStaticPrimitives(shape, {}, 0, prims);
+    return prims;
+}
+
+float terrainHeight(float x, float z) { return 2 * std::sin(x / 8) * std::cos(z / 8); }
+
+/// n boxes of half extent h (already fattened) in random order, resting in `layers` layers on the terrain over
+/// [-side, side]^2.
+Bounds pileOnTerrain(std::uint32_t n, float side, float h, int layers, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-side, side);
+    Bounds b;
+    b.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const float x = u(rng), z = u(rng);
+        const float y = terrainHeight(x, z) + h * float(1 + 2 * int(i % std::uint32_t(layers)));
+        b.minX[i] = x - h, b.maxX[i] = x + h, b.minY[i] = y - h, b.maxY[i] = y + h, b.minZ[i] = z - h,
+        b.maxZ[i] = z + h;
+    }
+    return b;
+}
+
+void BM_StaticBvhBuild(benchmark::State& state) {
+    const std::vector<StaticPrimitive> prims = terrainPrimitives(std::uint32_t(state.range(0)));
+    TaskPool pool(int(state.range(1)));
+    StaticBvh bvh;
+    for (auto _ : state) {
+        bvh.build(prims, pool);
+        benchmark::DoNotOptimize(bvh.mainTree().nodes.data());
+    }
+    state.counters["triangles"] = double(prims.size());
+    state.counters["nodes"] = double(bvh.stats().nodes);
+    state.counters["depth"] = double(bvh.stats().depth);
+    state.counters["sah"] = bvh.stats().sahCost;
+}
+// 100 x 100 cells = 20,000 triangles (S3); 1000 x 1000 = 2,000,000.
+BENCHMARK(BM_StaticBvhBuild)
+    ->ArgsProduct({{100, 1000}, {1, 2}})
+    ->ArgNames({"cells", "threads"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void runQuery(benchmark::State& state, const std::vector<StaticPrimitive>& prims, const Bounds& moving) {
+    TaskPool pool(int(state.range(0)));
+    StaticBvh bvh;
+    bvh.build(prims, pool);
+    std::vector<BodyPair> bodies;
+    std::vector<MeshPair> meshes;
+    std::vector<std::uint32_t> triangles;
+    for (auto _ : state) {
+        bvh.query(moving, {}, pool, bodies, meshes, triangles);
+        benchmark::DoNotOptimize(triangles.data());
+    }
+    state.counters["pairs"] = double(meshes.size() + bodies.size());
+    state.counters["triangles"] = double(triangles.size());
+    state.SetItemsProcessed(state.iterations() * moving.size());
+}
+
+/// S3 at rest: 4,000 bodies of half size 0.5 (+ 0.05 margin) piled in layers over the middle 50 x 50 m of the
+/// terrain, in S3's creation order (layer, then x, then z), jittered by up to a quarter of the 1.25 m pitch.
+Bounds s3Pile() {
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<float> jitter(-0.3f, 0.3f);
+    const float h = 0.55f;
+    Bounds b;
+    b.resize(4000);
+    for (std::uint32_t i = 0; i < 4000; ++i) {
+        const std::uint32_t layer = i / 1600, x = i % 1600 / 40, z = i % 40;
+        const float px = -24.375f + 1.25f * float(x) + jitter(rng), pz = -24.375f + 1.25f * float(z) + jitter(rng);
+        const float py = terrainHeight(px, pz) + h * float(1 + 2 * layer);
+        b.minX[i] = px - h, b.maxX[i] = px + h, b.minY[i] = py - h, b.maxY[i] = py + h, b.minZ[i] = pz - h,
+        b.maxZ[i] = pz + h;
+    }
+    return b;
+}
+
+void BM_StaticBvhQueryS3(benchmark::State& state) {
+    static const std::vector<StaticPrimitive> prims = terrainPrimitives(100);
+    static const Bounds moving = s3Pile();
+    runQuery(state, prims, moving);
+}
+BENCHMARK(BM_StaticBvhQueryS3)->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMicrosecond)->UseRealTime();
+
+/// 100,000 small boxes (half size 0.15) near the surface of the whole 20,000-triangle terrain, in random order
+/// (no coherence between consecutive queries: the cache's worst case).
+void BM_StaticBvhQuerySmallBoxes(benchmark::State& state) {
+    static const std::vector<StaticPrimitive> prims = terrainPrimitives(100);
+    static const Bounds moving = pileOnTerrain(100000, 50, 0.15f, 4, 2);
+    runQuery(state, prims, moving);
+}
+BENCHMARK(BM_StaticBvhQuerySmallBoxes)
+    ->Arg(1)
+    ->Arg(2)
+    ->ArgName("threads")
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
+
+}  // namespace

@@ -1,0 +1,585 @@
+// Static BVH: binned-SAH build of a four-wide tree, stack-based box queries in parallel chunks, and the edit policy
+// (tombstones + secondary tree) described in static_bvh.h.
+#include "broadphase/static_bvh.h"
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+#include "bounds.h"
+#include "parallel.h"
+#include "simd/simd.h"
+
+namespace rubble::detail {
+
+void StaticBvh::Node::setBox(int k, const Aabb& b) {
+    lo[k] = b.min.x, lo[4 + k] = b.min.y, lo[8 + k] = b.min.z;
+    hi[k] = b.max.x, hi[4 + k] = b.max.y, hi[8 + k] = b.max.z;
+}
+
+namespace {
+
+using Node = StaticBvh::Node;
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr std::uint32_t kNoParent = ~0u;
+constexpr std::uint32_t kPrimitiveBit = StaticBvh::kPrimitiveBit;
+constexpr std::uint32_t kUnusedLane = StaticBvh::kUnusedLane;
+/// Binned SAH with 32 bins per axis is within a few percent of a full sweep on meshes, at a fraction of the cost.
+constexpr int kBins = 32;
+/// Inputs above this size build their lower subtrees in parallel.
+constexpr std::uint32_t kParallelBuildMin = 1u << 16;
+
+/// A box with indexable axes, for the build's per-axis loops.
+struct Box {
+    float lo[3] = {kInf, kInf, kInf};
+    float hi[3] = {-kInf, -kInf, -kInf};
+
+    void grow(const Box& b) {
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], b.lo[a]);
+            hi[a] = std::max(hi[a], b.hi[a]);
+        }
+    }
+    /// Half the surface area; 0 for empty boxes (so empty bins cost nothing).
+    float halfArea() const {
+        const float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+        if (!(dx >= 0 && dy >= 0 && dz >= 0)) return 0;
+        return dx * dy + dy * dz + dz * dx;
+    }
+    Aabb aabb() const { return {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}}; }
+};
+
+Box toBox(const Aabb& b) { return {{b.min.x, b.min.y, b.min.z}, {b.max.x, b.max.y, b.max.z}}; }
+
+/// What the build partitions: one record per primitive with its box, doubled centroid (lo + hi; the factor 2 changes
+/// no split) and input index. Moving the records themselves keeps every pass a sequential stream.
+struct BuildPrimitive {
+    Box box;
+    float centroid[3];
+    std::uint32_t index;
+};
+
+struct Range {
+    std::uint32_t begin = 0, end = 0;
+    Box box;
+    std::uint32_t size() const { return end - begin; }
+};
+
+/// Bin of a centroid among `bins`; NaN-safe (lands in bin 0) so that bad input cannot make an out-of-range index.
+inline int binOf(float c, float lo, float scale, int bins) {
+    const float f = (c - lo) * scale;
+    return f > 0 ? (f < float(bins - 1) ? int(f) : bins - 1) : 0;
+}
+
+Box rangeBox(const std::vector<BuildPrimitive>& prims, std::uint32_t begin, std::uint32_t end) {
+    Box b;
+    for (std::uint32_t i = begin; i < end; ++i) b.grow(prims[i].box);
+    return b;
+}
+
+/// Splits `r` in two by the binned SAH over all three axes (cost: area(left) n(left) + area(right) n(right)); when
+/// every centroid coincides (duplicate triangles) it splits at the middle of the range. Both halves are non-empty.
+void split(std::vector<BuildPrimitive>& prims, const Range& r, Range& left, Range& right) {
+    float clo[3] = {kInf, kInf, kInf}, chi[3] = {-kInf, -kInf, -kInf};
+    for (std::uint32_t i = r.begin; i < r.end; ++i) {
+        for (int a = 0; a < 3; ++a) {
+            clo[a] = std::min(clo[a], prims[i].centroid[a]);
+            chi[a] = std::max(chi[a], prims[i].centroid[a]);
+        }
+    }
+    // Small ranges (most splits of a tree) use as many bins as primitives: as good a choice, at a fraction of the
+    // cost of clearing and sweeping 32 bins.
+    const int binCount = int(std::min<std::uint32_t>(kBins, r.size()));
+    float scale[3];
+    for (int a = 0; a < 3; ++a) {
+        const float extent = chi[a] - clo[a];
+        scale[a] = extent > 0 ? float(binCount) / extent : 0;
+    }
+
+    Box bins[3][kBins];
+    std::uint32_t counts[3][kBins] = {};
+    for (std::uint32_t i = r.begin; i < r.end; ++i) {
+        for (int a = 0; a < 3; ++a) {
+            const int b = binOf(prims[i].centroid[a], clo[a], scale[a], binCount);
+            bins[a][b].grow(prims[i].box);
+            ++counts[a][b];
+        }
+    }
+
+    // Sweep from the right for suffix costs, then from the left; split s puts bins [0, s) left. An axis whose
+    // centroids coincide has everything in bin 0 and offers no split.
+    float bestCost = kInf;
+    int bestAxis = -1, bestSplit = 0;
+    for (int a = 0; a < 3; ++a) {
+        float rightCost[kBins];
+        Box acc;
+        std::uint32_t n = 0;
+        for (int s = binCount - 1; s > 0; --s) {
+            acc.grow(bins[a][s]);
+            n += counts[a][s];
+            rightCost[s] = acc.halfArea() * float(n);
+        }
+        acc = Box{};
+        n = 0;
+        for (int s = 1; s < binCount; ++s) {
+            acc.grow(bins[a][s - 1]);
+            n += counts[a][s - 1];
+            if (n == 0 || n == r.size()) continue;
+            const float cost = acc.halfArea() * float(n) + rightCost[s];
+            if (cost < bestCost) bestCost = cost, bestAxis = a, bestSplit = s;
+        }
+    }
+    if (bestAxis < 0) {  // all centroids coincide: any split is as good, the middle keeps the tree balanced
+        const std::uint32_t mid = r.begin + r.size() / 2;
+        left = {r.begin, mid, rangeBox(prims, r.begin, mid)};
+        right = {mid, r.end, rangeBox(prims, mid, r.end)};
+        return;
+    }
+    const int a = bestAxis;
+    const float lo = clo[a], sc = scale[a];
+    // std::partition is sequential and deterministic; the predicate recomputes the very bins counted above.
+    const auto mid = std::partition(prims.begin() + r.begin, prims.begin() + r.end, [&](const BuildPrimitive& p) {
+        return binOf(p.centroid[a], lo, sc, binCount) < bestSplit;
+    });
+    left = {r.begin, std::uint32_t(mid - prims.begin()), {}};
+    right = {left.end, r.end, {}};
+    for (int s = 0; s < binCount; ++s) (s < bestSplit ? left.box : right.box).grow(bins[a][s]);
+}
+
+struct BuildTask {
+    Range range;
+    std::uint32_t parent = kNoParent;  ///< node whose lane points here
+    std::uint32_t lane = 0;
+    std::uint32_t depth = 1;
+};
+
+Node emptyNode() {
+    Node n;
+    for (int k = 0; k < 4; ++k) {
+        n.setBox(k, Box{}.aabb());
+        n.setChild(k, kUnusedLane);
+        n.hi[12 + k] = 0;
+    }
+    return n;
+}
+
+/// Builds the subtree of `root` depth-first (pre-order, children in lane order) into `nodes`, iteratively so that
+/// skewed inputs cannot overflow the call stack. A node of more than four primitives splits its range twice (binary
+/// SAH, then SAH on each half) into up to four children; a node of at most four holds them as primitive lanes.
+/// With `deferred`, child ranges of at most `deferAtMost` primitives are recorded for a parallel pass instead of
+/// being expanded. Returns the deepest node level reached.
+std::uint32_t buildNodes(std::vector<BuildPrimitive>& prims, const BuildTask& root, AlignedVector<Node>& nodes,
+                         std::vector<BuildTask>* deferred, std::uint32_t deferAtMost) {
+    std::uint32_t depth = 0;
+    std::vector<BuildTask> stack{root};
+    while (!stack.empty()) {
+        const BuildTask task = stack.back();
+        stack.pop_back();
+        const auto index = std::uint32_t(nodes.size());
+        if (task.parent != kNoParent) nodes[task.parent].setChild(int(task.lane), index);
+        nodes.push_back(emptyNode());
+        depth = std::max(depth, task.depth);
+
+        Range children[4];
+        int count = 0;
+        const Range& r = task.range;
+        if (r.size() <= 4) {
+            for (std::uint32_t i = r.begin; i < r.end; ++i) children[count++] = {i, i + 1, prims[i].box};
+        } else {
+            Range halves[2];
+            split(prims, r, halves[0], halves[1]);
+            for (const Range& h : halves) {
+                if (h.size() > 4) {  // a range of up to four fills one leaf node; splitting it would waste lanes
+                    split(prims, h, children[count], children[count + 1]);
+                    count += 2;
+                } else {
+                    children[count++] = h;
+                }
+            }
+        }
+
+        for (int k = count - 1; k >= 0; --k) {  // reversed so that the stack pops lane 0 first
+            const Range& c = children[k];
+            nodes[index].setBox(k, c.box.aabb());
+            if (c.size() == 1) {
+                nodes[index].setChild(k, kPrimitiveBit | c.begin);
+            } else if (deferred != nullptr && c.size() <= deferAtMost) {
+                deferred->push_back({c, index, std::uint32_t(k), task.depth + 1});
+            } else {
+                stack.push_back({c, index, std::uint32_t(k), task.depth + 1});
+            }
+        }
+    }
+    return depth;
+}
+
+/// Builds `tree` over `primitives`. Large inputs build the top of the tree first, then the subtrees below it in
+/// parallel, each into its own array, appended in a fixed order: the result depends on the input alone.
+void buildTree(StaticBvh::Tree& tree, const std::vector<StaticPrimitive>& primitives, TaskPool& pool) {
+    tree.nodes.clear();
+    tree.primitives.clear();
+    tree.depth = 0;
+    if (primitives.empty()) return;
+    if (primitives.size() >= kPrimitiveBit) throw std::length_error("StaticBvh: too many primitives");
+    const auto n = std::uint32_t(primitives.size());
+
+    std::vector<BuildPrimitive> prims(n);
+    Box all;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        BuildPrimitive& p = prims[i];
+        p.box = toBox(primitives[i].box);
+        for (int a = 0; a < 3; ++a) p.centroid[a] = p.box.lo[a] + p.box.hi[a];
+        p.index = i;
+        all.grow(p.box);
+    }
+
+    const BuildTask root{{0, n, all}, kNoParent, 0, 1};
+    if (n < kParallelBuildMin) {
+        tree.depth = buildNodes(prims, root, tree.nodes, nullptr, 0);
+    } else {
+        // Subtree size cut: a function of n only (never of the thread count), giving some 64-128 tasks.
+        const std::uint32_t cut = std::max<std::uint32_t>(4096, n / 64);
+        std::vector<BuildTask> jobs;
+        tree.depth = buildNodes(prims, root, tree.nodes, &jobs, cut);
+        std::vector<AlignedVector<Node>> jobNodes(jobs.size());
+        std::vector<std::uint32_t> jobDepth(jobs.size());
+        pool.forChunks(jobs.size(), 1, [&](std::size_t j, std::size_t, std::size_t, int) {
+            BuildTask local = jobs[j];
+            local.parent = kNoParent;
+            // Jobs partition disjoint ranges of prims, so they never touch the same data.
+            jobDepth[j] = buildNodes(prims, local, jobNodes[j], nullptr, 0);
+        });
+        for (std::size_t j = 0; j < jobs.size(); ++j) {
+            const auto offset = std::uint32_t(tree.nodes.size());
+            tree.nodes[jobs[j].parent].setChild(int(jobs[j].lane), offset);
+            for (Node node : jobNodes[j]) {
+                for (int k = 0; k < 4; ++k)
+                    if ((node.child(k) & kPrimitiveBit) == 0) node.setChild(k, node.child(k) + offset);
+                tree.nodes.push_back(node);
+            }
+            tree.depth = std::max(tree.depth, jobDepth[j]);  // jobs count levels from the global root
+        }
+    }
+
+    tree.primitives.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const StaticPrimitive& p = primitives[prims[i].index];
+        tree.primitives[i] = {p.body, p.triangle};
+    }
+}
+
+bool isPrimitive(std::uint32_t child) { return (child & kPrimitiveBit) != 0 && child != kUnusedLane; }
+
+/// A query box broadcast to the node row layout, in registers: lo = (minX x4, minY x4, minZ x4, minZ x4) and hi
+/// likewise, split into 16 / kLanes native vectors, so that lane k of (lo <= node.hi) & (node.lo <= hi) tests child
+/// k on one axis per quarter.
+struct QueryRows {
+    static_assert(16 % simd::kLanes == 0, "a node row must split into whole native vectors");
+    static constexpr std::size_t kParts = 16 / simd::kLanes;
+    simd::FloatW lo[kParts], hi[kParts];
+
+    QueryRows(const float (&boxLo)[3], const float (&boxHi)[3]) {
+        using simd::FloatW;
+        for (std::size_t part = 0; part < kParts; ++part) {
+            const FloatW lane = simd::laneIndices<FloatW>() + simd::broadcast<FloatW>(float(part * simd::kLanes));
+            const simd::MaskW x = lane < simd::broadcast<FloatW>(4), y = lane < simd::broadcast<FloatW>(8);
+            lo[part] = simd::select(x, FloatW(boxLo[0]), simd::select(y, FloatW(boxLo[1]), FloatW(boxLo[2])));
+            hi[part] = simd::select(x, FloatW(boxHi[0]), simd::select(y, FloatW(boxHi[1]), FloatW(boxHi[2])));
+        }
+    }
+};
+
+/// Bit k set when child k of `n` overlaps the query box (closed intervals). Written over the native lane type: one
+/// compare pair with AVX-512, two with AVX, four with SSE; the fourth quarter (child indices) is ignored.
+inline unsigned overlapMask(const Node& n, const QueryRows& q) {
+    using simd::FloatW;
+    alignas(16) bool bits[16];
+    for (std::size_t part = 0; part < QueryRows::kParts; ++part) {
+        const std::size_t off = part * simd::kLanes;
+        const simd::MaskW m =
+            (q.lo[part] <= simd::load<FloatW>(n.hi + off)) & (simd::load<FloatW>(n.lo + off) <= q.hi[part]);
+        simd::storeMask(bits + off, m);
+    }
+    // bits holds one 0/1 byte per lane: and the x, y and z quarters as 32-bit words, then pack one bit per child.
+    std::uint32_t x, y, z;
+    std::memcpy(&x, bits, 4);
+    std::memcpy(&y, bits + 4, 4);
+    std::memcpy(&z, bits + 8, 4);
+    const std::uint32_t all = x & y & z;
+    return (all & 1u) | (all >> 7 & 2u) | (all >> 14 & 4u) | (all >> 21 & 8u);
+}
+
+/// Appends (body << 32) | triangle of every primitive of `tree` whose box overlaps `q`. `stack` holds at least
+/// 3 * depth + 1 entries: each level pops one node and pushes at most four.
+void collect(const StaticBvh::Tree& tree, const QueryRows& q, std::uint32_t* stack, std::vector<std::uint64_t>& hits) {
+    if (tree.nodes.empty()) return;
+    const Node* nodes = tree.nodes.data();
+    const StaticBvh::PrimitiveRef* prims = tree.primitives.data();
+    std::uint32_t top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const Node& n = nodes[stack[--top]];
+        for (unsigned mask = overlapMask(n, q); mask != 0; mask &= mask - 1) {
+            const std::uint32_t c = n.child(std::countr_zero(mask));
+            if ((c & kPrimitiveBit) == 0) {
+                stack[top++] = c;
+            } else {
+                const StaticBvh::PrimitiveRef& p = prims[c & ~kPrimitiveBit];
+                hits.push_back(std::uint64_t(p.body) << 32 | p.triangle);
+            }
+        }
+    }
+}
+
+}  // namespace
+
+void StaticBvh::build(std::vector<StaticPrimitive> primitives, TaskPool& pool) {
+    buildTree(main_, primitives, pool);
+    secondary_ = Tree{};
+    pending_.clear();
+    mainByBody_.clear();
+    mainByBodyValid_ = false;
+    tombstones_ = 0;
+    secondaryDirty_ = false;
+}
+
+void StaticBvh::insert(std::span<const StaticPrimitive> primitives) {
+    if (primitives.empty()) return;
+    pending_.insert(pending_.end(), primitives.begin(), primitives.end());
+    secondaryDirty_ = true;
+}
+
+void StaticBvh::remove(std::uint32_t body) {
+    if (!main_.primitives.empty()) {
+        if (!mainByBodyValid_) {
+            mainByBody_.clear();
+            mainByBody_.reserve(main_.primitives.size());
+            for (std::size_t i = 0; i < main_.nodes.size(); ++i)
+                for (int k = 0; k < 4; ++k)
+                    if (const std::uint32_t c = main_.nodes[i].child(k); isPrimitive(c))
+                        mainByBody_.push_back(std::uint64_t(main_.primitives[c & ~kPrimitiveBit].body) << 32 |
+                                              (i * 4 + std::uint32_t(k)));
+            std::sort(mainByBody_.begin(), mainByBody_.end());
+            mainByBodyValid_ = true;
+        }
+        const std::uint64_t first = std::uint64_t(body) << 32;
+        for (auto it = std::lower_bound(mainByBody_.begin(), mainByBody_.end(), first);
+             it != mainByBody_.end() && (*it >> 32) == body; ++it) {
+            Node& node = main_.nodes[std::uint32_t(*it) / 4];
+            const int lane = int(std::uint32_t(*it) % 4);
+            if (!(node.lo[lane] <= node.hi[lane])) continue;  // removed before (the id may since have been reused)
+            node.setBox(lane, Box{}.aabb());
+            ++tombstones_;
+        }
+    }
+    const std::size_t before = pending_.size();
+    std::erase_if(pending_, [body](const StaticPrimitive& p) { return p.body == body; });
+    secondaryDirty_ |= pending_.size() != before;
+}
+
+void StaticBvh::commit(TaskPool& pool) {
+    const auto mainSize = std::uint64_t(main_.primitives.size());
+    const std::uint64_t live = mainSize - tombstones_;
+    if (std::uint64_t(tombstones_) * 4 > mainSize || std::uint64_t(pending_.size()) * 8 > live) {
+        if (tombstones_ > 0 || !pending_.empty()) rebuildMain(pool);
+    } else if (secondaryDirty_) {
+        buildTree(secondary_, pending_, pool);
+    }
+    secondaryDirty_ = false;
+}
+
+void StaticBvh::rebuildMain(TaskPool& pool) {
+    std::vector<StaticPrimitive> all;
+    all.reserve(main_.primitives.size() - tombstones_ + pending_.size());
+    for (const Node& node : main_.nodes) {
+        for (int k = 0; k < 4; ++k) {
+            const std::uint32_t c = node.child(k);
+            if (!isPrimitive(c) || !(node.lo[k] <= node.hi[k])) continue;  // not a primitive, or a tombstone
+            const PrimitiveRef& p = main_.primitives[c & ~kPrimitiveBit];
+            all.push_back({node.box(k), p.body, p.triangle});
+        }
+    }
+    all.insert(all.end(), pending_.begin(), pending_.end());
+    build(std::move(all), pool);
+}
+
+void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, TaskPool& pool,
+                      std::vector<BodyPair>& bodyPairs, std::vector<MeshPair>& meshPairs,
+                      std::vector<std::uint32_t>& meshTriangles) {
+    commit(pool);
+    bodyPairs.clear();
+    meshPairs.clear();
+    meshTriangles.clear();
+    const std::uint32_t n = moving.size();
+    if (n == 0 || (main_.nodes.empty() && secondary_.nodes.empty())) return;
+
+    const std::size_t chunkCount = TaskPool::chunkCount(n, kQueryChunk);
+    if (chunks_.size() < chunkCount) chunks_.resize(chunkCount);
+    if (workers_.size() < std::size_t(pool.threadCount())) workers_.resize(std::size_t(pool.threadCount()));
+    const std::size_t stackSize = 3 * std::size_t(std::max(main_.depth, secondary_.depth)) + 1;
+    for (WorkerScratch& w : workers_) w.stack.resize(std::max(w.stack.size(), stackSize));
+
+    pool.forChunks(n, kQueryChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int worker) {
+        ChunkOutput& out = chunks_[chunk];
+        out.bodyPairs.clear();
+        out.meshPairs.clear();
+        out.triangles.clear();
+        WorkerScratch& scratch = workers_[std::size_t(worker)];
+        std::vector<std::uint64_t>& hits = scratch.hits;
+        const PairFilter& mf = filter.moving;
+        for (auto i = std::uint32_t(begin); i < end; ++i) {
+            if (mf.asleep(i)) continue;  // asleep vs static (which counts as asleep) is never a pair
+            const QueryRows q({moving.minX[i], moving.minY[i], moving.minZ[i]},
+                              {moving.maxX[i], moving.maxY[i], moving.maxZ[i]});
+            hits.clear();
+            collect(main_, q, scratch.stack.data(), hits);
+            collect(secondary_, q, scratch.stack.data(), hits);
+            if (hits.empty()) continue;
+            // Hits come in tree order; sorting (body, triangle) gives the canonical order, whichever tree and
+            // leaf held them. Duplicates only arise from inserting the same primitive twice.
+            std::sort(hits.begin(), hits.end());
+            hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
+
+            const std::uint32_t category = mf.category != nullptr ? mf.category[i] : ~0u;
+            const std::uint32_t mask = mf.mask != nullptr ? mf.mask[i] : ~0u;
+            for (std::size_t h = 0; h < hits.size();) {
+                const auto body = std::uint32_t(hits[h] >> 32);
+                std::size_t runEnd = h;
+                while (runEnd < hits.size() && std::uint32_t(hits[runEnd] >> 32) == body) ++runEnd;
+                const std::uint32_t staticCategory = filter.staticCategory ? filter.staticCategory[body] : ~0u;
+                const std::uint32_t staticMask = filter.staticMask ? filter.staticMask[body] : ~0u;
+                if ((category & staticMask) != 0 && (staticCategory & mask) != 0) {
+                    // kWholeBody (~0u) sorts after every triangle of the same body.
+                    std::size_t triangleEnd = runEnd;
+                    if (std::uint32_t(hits[runEnd - 1]) == kWholeBody) {
+                        out.bodyPairs.push_back({i, body});
+                        --triangleEnd;
+                    }
+                    if (triangleEnd > h) {
+                        out.meshPairs.push_back(
+                            {i, body, std::uint32_t(out.triangles.size()), std::uint32_t(triangleEnd - h)});
+                        for (std::size_t t = h; t < triangleEnd; ++t) out.triangles.push_back(std::uint32_t(hits[t]));
+                    }
+                }
+                h = runEnd;
+            }
+        }
+    });
+
+    // Merge in chunk order: the output is the same for any thread count.
+    std::size_t bodyTotal = 0, meshTotal = 0, triangleTotal = 0;
+    for (std::size_t c = 0; c < chunkCount; ++c) {
+        bodyTotal += chunks_[c].bodyPairs.size();
+        meshTotal += chunks_[c].meshPairs.size();
+        triangleTotal += chunks_[c].triangles.size();
+    }
+    bodyPairs.reserve(bodyTotal);
+    meshPairs.reserve(meshTotal);
+    meshTriangles.reserve(triangleTotal);
+    for (std::size_t c = 0; c < chunkCount; ++c) {
+        const ChunkOutput& out = chunks_[c];
+        const auto base = std::uint32_t(meshTriangles.size());
+        bodyPairs.insert(bodyPairs.end(), out.bodyPairs.begin(), out.bodyPairs.end());
+        for (MeshPair m : out.meshPairs) {
+            m.firstTriangle += base;
+            meshPairs.push_back(m);
+        }
+        meshTriangles.insert(meshTriangles.end(), out.triangles.begin(), out.triangles.end());
+    }
+}
+
+std::uint32_t StaticBvh::primitiveCount() const {
+    return std::uint32_t(main_.primitives.size() - tombstones_ + pending_.size());
+}
+
+StaticBvhStats StaticBvh::stats() const {
+    StaticBvhStats s;
+    s.nodes = std::uint32_t(main_.nodes.size());
+    s.depth = main_.depth;
+    s.primitives = std::uint32_t(main_.primitives.size());
+    s.tombstones = tombstones_;
+    s.pending = std::uint32_t(pending_.size());
+    if (main_.nodes.empty()) return s;
+    Box root;
+    for (int k = 0; k < 4; ++k) root.grow(toBox(main_.nodes[0].box(k)));
+    double rootArea = root.halfArea();
+    if (!(rootArea > 0)) rootArea = 1;  // a flat or single-point set: weights become plain areas
+    double cost = 1;                    // the root is always visited
+    for (const Node& n : main_.nodes)
+        for (int k = 0; k < 4; ++k)
+            if (n.child(k) != kUnusedLane) cost += toBox(n.box(k)).halfArea() / rootArea;
+    s.sahCost = cost;
+    return s;
+}
+
+// ---- Primitives of static bodies ----
+
+std::uint32_t heightfieldTriangleCount(const Heightfield& field) {
+    if (field.rows < 2 || field.columns < 2) return 0;
+    return 2 * (field.rows - 1) * (field.columns - 1);
+}
+
+std::array<Vec3, 3> heightfieldTriangle(const Heightfield& field, std::uint32_t triangle) {
+    const std::uint32_t cell = triangle / 2, cellsPerRow = field.columns - 1;
+    const std::uint32_t r = cell / cellsPerRow, c = cell % cellsPerRow;
+    auto sample = [&](std::uint32_t row, std::uint32_t col) {
+        return Vec3{float(col) * field.spacingX, field.heights[std::size_t(row) * field.columns + col],
+                    float(row) * field.spacingZ};
+    };
+    const Vec3 p00 = sample(r, c), p10 = sample(r, c + 1), p01 = sample(r + 1, c), p11 = sample(r + 1, c + 1);
+    if ((triangle & 1) == 0) return {p00, p01, p11};
+    return {p00, p11, p10};
+}
+
+namespace {
+
+Aabb triangleBox(Vec3 a, Vec3 b, Vec3 c) {
+    return {{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})},
+            {std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})}};
+}
+
+}  // namespace
+
+void appendStaticPrimitives(const Shape& shape, const Transform& pose, std::uint32_t body,
+                            std::vector<StaticPrimitive>& out) {
+    if (shape.kind == ShapeKind::TriangleMesh) {
+        const TriangleMesh& mesh = *shape.mesh;
+        std::vector<Vec3> world(mesh.vertices.size());
+        for (std::size_t v = 0; v < world.size(); ++v) world[v] = apply(pose, mesh.vertices[v]);
+        out.reserve(out.size() + mesh.triangleCount());
+        for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) {
+            const std::uint32_t* idx = &mesh.indices[3 * std::size_t(t)];
+            out.push_back({triangleBox(world[idx[0]], world[idx[1]], world[idx[2]]), body, t});
+        }
+    } else if (shape.kind == ShapeKind::Heightfield) {
+        // From the grid directly: each sample is posed once per row pair, not once per triangle.
+        const Heightfield& field = *shape.heightfield;
+        if (heightfieldTriangleCount(field) == 0) return;
+        out.reserve(out.size() + heightfieldTriangleCount(field));
+        auto posedRow = [&](std::uint32_t row, std::vector<Vec3>& dst) {
+            dst.resize(field.columns);
+            for (std::uint32_t col = 0; col < field.columns; ++col)
+                dst[col] =
+                    apply(pose, {float(col) * field.spacingX, field.heights[std::size_t(row) * field.columns + col],
+                                 float(row) * field.spacingZ});
+        };
+        std::vector<Vec3> row0, row1;
+        posedRow(0, row0);
+        for (std::uint32_t r = 0; r + 1 < field.rows; ++r) {
+            posedRow(r + 1, row1);
+            for (std::uint32_t c = 0; c + 1 < field.columns; ++c) {
+                const Vec3 p00 = row0[c], p10 = row0[c + 1], p01 = row1[c], p11 = row1[c + 1];
+                const std::uint32_t t = 2 * (r * (field.columns - 1) + c);
+                out.push_back({triangleBox(p00, p01, p11), body, t});
+                out.push_back({triangleBox(p00, p11, p10), body, t + 1});
+            }
+            std::swap(row0, row1);
+        }
+    } else {
+        out.push_back({worldBounds(shape, pose), body, kWholeBody});
+    }
+}
+
+}  // namespace rubble::detail
