@@ -16,6 +16,7 @@ namespace rubble::detail {
 enum BodyFlags : std::uint8_t {
     kFlagKinematic = 1u << 0,
     kFlagFrozen = 1u << 1,  ///< state went non-finite; no longer simulated
+    kFlagAsleep = 1u << 2,  ///< resting in a sleeping island: the broad phase skips pairs of two such bodies
 };
 
 /// Dynamic and kinematic bodies. Position is the centre of mass; the user-facing origin is

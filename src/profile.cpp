@@ -7,6 +7,8 @@ namespace rubble {
 std::string_view stageName(Stage s) {
     static constexpr std::array<std::string_view, kStageCount> kNames{
         "integrate_velocities",
+        "update_bounds",
+        "broad_phase",
         "integrate_positions",
     };
     const int i = static_cast<int>(s);

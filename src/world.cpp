@@ -8,6 +8,8 @@
 #include <string>
 
 #include "body_storage.h"
+#include "bounds.h"
+#include "broadphase/broadphase_stage.h"
 #include "effects.h"
 #include "integrate.h"
 #include "parallel.h"
@@ -125,6 +127,10 @@ struct World::Impl {
     std::vector<std::uint32_t> freeShapes;
 
     detail::IntegrationScratch integrationScratch;
+    detail::ShapeBoundsTable shapeBounds;
+    detail::Bounds movingBounds;
+    detail::BroadPhaseStage broadPhase;
+    detail::CandidatePairs pairs;
     std::vector<std::uint32_t> nonFinite;
     std::vector<BodyId> frozenReports;
 
@@ -272,6 +278,7 @@ ShapeId World::createShape(const ShapeDef& def) {
         w.shapeUsers.push_back(0);
         w.shapeAlive.push_back(false);
     }
+    if (!w.shapes[index].staticOnly()) w.shapeBounds.set(index, detail::shapeBoundsInfo(w.shapes[index]));
     w.shapeGeneration[index] += 1;
     if (w.shapeGeneration[index] == 0) w.shapeGeneration[index] = 1;
     w.shapeAlive[index] = true;
@@ -339,6 +346,7 @@ BodyId World::createBody(const BodyDef& def) {
         s.userData[i] = def.userData;
         w.shapeUsers[def.shape.index] += 1;
         w.effectsDirty = true;
+        w.broadPhase.staticAdded(id.index);
         return id;
     }
 
@@ -373,6 +381,7 @@ void World::destroyBody(BodyId id) {
     const std::uint32_t shape =
         slot.set == BodySet::Moving ? w.bodies.moving.shape[slot.dense] : w.bodies.statics.shape[slot.dense];
     w.shapeUsers[shape] -= 1;
+    if (slot.set == BodySet::Static) w.broadPhase.staticRemoved(id.index);
     w.bodies.release(id);
     w.effectsDirty = true;
 }
@@ -494,6 +503,8 @@ void World::setTransform(BodyId id, Vec3 position, Quat orientation) {
         auto& b = w.bodies.statics;
         b.px[i] = position.x, b.py[i] = position.y, b.pz[i] = position.z;
         b.qx[i] = q.x, b.qy[i] = q.y, b.qz[i] = q.z, b.qw[i] = q.w;
+        w.broadPhase.staticRemoved(id.index);
+        w.broadPhase.staticAdded(id.index);
         return;
     }
     MovingBodies& m = w.bodies.moving;
@@ -553,6 +564,7 @@ void World::setFilter(BodyId id, CollisionFilter f) {
     if (s.set == BodySet::Static) {
         w.bodies.statics.filterCategory[s.dense] = f.category;
         w.bodies.statics.filterMask[s.dense] = f.mask;
+        w.broadPhase.staticFiltersChanged();
     } else {
         w.bodies.moving.filterCategory[s.dense] = f.category;
         w.bodies.moving.filterMask[s.dense] = f.mask;
@@ -663,6 +675,25 @@ void World::step(float dt) {
             detail::integrateVelocities(w.bodies.moving, params, w.integrationScratch, *w.pool, w.nonFinite);
         }
         w.freezeReported();
+        // One collision pass per step, whatever the substep count; boxes cover the motion of the whole step. Pairs
+        // exist only where a moving body can meet another body.
+        const std::uint32_t moving = w.bodies.moving.size();
+        if (sub == 0 && (moving > 1 || (moving == 1 && w.bodies.statics.size() > 0))) {
+            {
+                detail::StageTimer timer(profile, Stage::UpdateBounds, w.origin);
+                detail::updateBounds(w.bodies.moving, w.shapeBounds, detail::BoundsParams{dt, w.settings.contactMargin},
+                                     *w.pool, w.movingBounds);
+            }
+            {
+                detail::StageTimer timer(profile, Stage::BroadPhase, w.origin);
+                w.broadPhase.findPairs(w.movingBounds, w.bodies, w.shapes, w.settings.broadPhase, *w.pool, w.pairs);
+            }
+            profile.broadPhase = w.broadPhase.lastKind();
+            profile.movingPairs = static_cast<std::uint32_t>(w.pairs.moving.size());
+            profile.staticPairs = static_cast<std::uint32_t>(w.pairs.statics.size());
+            profile.meshPairs = static_cast<std::uint32_t>(w.pairs.meshes.size());
+            profile.meshTriangles = static_cast<std::uint32_t>(w.pairs.meshTriangles.size());
+        }
         {
             detail::StageTimer timer(profile, Stage::IntegratePositions, w.origin);
             detail::integratePositions(w.bodies.moving, params, w.integrationScratch, *w.pool, w.nonFinite);
@@ -687,6 +718,7 @@ void World::setSettings(const WorldSettings& s) {
     static constexpr const char* kWhere = "World::setSettings";
     requireFinite(kWhere, "settings.gravity", s.gravity);
     requireFinite(kWhere, "settings.timeStep", s.timeStep);
+    requireNonNegative(kWhere, "settings.contactMargin", s.contactMargin);
     if (s.timeStep <= 0) fail(kWhere, "settings.timeStep must be > 0 (got " + std::to_string(s.timeStep) + ")");
     if (s.substeps < 1 || s.substeps > 64)
         fail(kWhere, "settings.substeps must be in [1, 64] (got " + std::to_string(s.substeps) + ")");

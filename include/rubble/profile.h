@@ -8,7 +8,7 @@
 namespace rubble {
 
 /// The stages of a step, in data order. Only stages that exist are listed; later stages join this list.
-enum class Stage : std::uint8_t { IntegrateVelocities, IntegratePositions, Count };
+enum class Stage : std::uint8_t { IntegrateVelocities, UpdateBounds, BroadPhase, IntegratePositions, Count };
 inline constexpr int kStageCount = static_cast<int>(Stage::Count);
 
 /// Stage name shared by the runner's table, the trace and the benchmark counters.
@@ -30,6 +30,11 @@ struct Profile {
     std::uint32_t bodyCount = 0;    ///< bodies in the world, static ones included
     std::uint32_t movingCount = 0;  ///< dynamic and kinematic bodies
     std::uint32_t frozenCount = 0;  ///< bodies frozen in this step because their state became non-finite
+    BroadPhaseKind broadPhase = BroadPhaseKind::Auto;  ///< algorithm that found the moving pairs (Auto: none ran)
+    std::uint32_t movingPairs = 0;                     ///< candidate pairs of two moving bodies
+    std::uint32_t staticPairs = 0;    ///< candidate pairs of a moving and a static body (meshes excluded)
+    std::uint32_t meshPairs = 0;      ///< moving bodies against static meshes and heightfields
+    std::uint32_t meshTriangles = 0;  ///< triangles handed over with the mesh pairs
 
     const StageTiming& operator[](Stage s) const { return stages[static_cast<int>(s)]; }
     StageTiming& operator[](Stage s) { return stages[static_cast<int>(s)]; }

@@ -58,6 +58,9 @@ struct WorldSettings {
     int velocityIterations = 8;
     int positionIterations = 2;
     int threads = 0;  ///< size of the task arena; 0 = all hardware threads
+    /// Bounding boxes are enlarged by this much on every side (besides the motion of the step), so that pairs are
+    /// found before their bodies touch (speculative contacts), m.
+    float contactMargin = 0.02f;
     Integrator integrator = Integrator::SemiImplicitEuler;
     /// Effects the scene declares. The engine removes those the content cannot show (see World::activeEffects).
     EffectSet effects = EffectSet::defaults();

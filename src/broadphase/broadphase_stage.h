@@ -1,0 +1,63 @@
+#pragma once
+// The broad-phase stage: runs the moving-moving algorithm the settings ask for (or the one `auto` picks from the
+// scene), the static BVH for moving-static pairs, and brings all pairs into the canonical order.
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "body_storage.h"
+#include "broadphase/broadphase.h"
+#include "rubble/settings.h"
+#include "shapes/shape.h"
+
+namespace rubble::detail {
+
+class TaskPool;
+class SweepAndPrune;
+class MultiResolutionGrid;
+class StaticBvh;
+
+/// What `auto` looks at: the expected number of boxes a sweep meets per body along the best axis. SAP wins while
+/// that stays small; the grid's cost per body does not depend on it.
+struct BroadPhaseChoice {
+    BroadPhaseKind kind = BroadPhaseKind::SweepAndPrune;
+    float sweepCandidatesPerBody = 0;
+};
+
+/// Picks SAP or the grid for these boxes. `current` adds hysteresis so the choice does not flip every step.
+BroadPhaseChoice chooseBroadPhase(const Bounds& bounds, BroadPhaseKind current);
+
+class BroadPhaseStage {
+public:
+    BroadPhaseStage();
+    ~BroadPhaseStage();
+    BroadPhaseStage(const BroadPhaseStage&) = delete;
+    BroadPhaseStage& operator=(const BroadPhaseStage&) = delete;
+
+    /// Static bodies changed between steps. Additions and removals edit the static BVH in place (no rebuild from
+    /// scratch); a moved static body is a removal plus an addition. Filter changes only refresh the filter table.
+    void staticAdded(std::uint32_t slot);
+    void staticRemoved(std::uint32_t slot);
+    void staticFiltersChanged() { filtersDirty_ = true; }
+
+    /// Candidate pairs for this step: moving-moving pairs from SAP or the grid, moving-static pairs from the BVH.
+    void findPairs(const Bounds& moving, const BodyStorage& storage, const std::vector<Shape>& shapes,
+                   BroadPhaseKind requested, TaskPool& pool, CandidatePairs& out);
+
+    /// The algorithm the last call used for moving-moving pairs.
+    BroadPhaseKind lastKind() const { return lastKind_; }
+    std::uint32_t staticPrimitiveCount() const;
+
+private:
+    void applyStaticEdits(const BodyStorage& storage, const std::vector<Shape>& shapes, TaskPool& pool);
+
+    std::unique_ptr<SweepAndPrune> sap_;
+    std::unique_ptr<MultiResolutionGrid> grid_;
+    std::unique_ptr<StaticBvh> bvh_;
+    BroadPhaseKind lastKind_ = BroadPhaseKind::SweepAndPrune;
+    std::vector<std::uint32_t> pendingAdds_, pendingRemoves_;
+    std::vector<std::uint32_t> staticCategory_, staticMask_;  ///< by static slot
+    bool filtersDirty_ = true;
+};
+
+}  // namespace rubble::detail
