@@ -3,6 +3,8 @@
 // and the world inverse inertia matches an independent Eigen computation.
 #include <gtest/gtest.h>
 
+#include "support/print.h"
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>

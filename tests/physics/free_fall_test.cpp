@@ -13,6 +13,8 @@
 // far below float rounding, so the bound is float rounding: 2e-6 relative).
 #include <gtest/gtest.h>
 
+#include "support/print.h"
+
 #include <cmath>
 #include <cstdio>
 
