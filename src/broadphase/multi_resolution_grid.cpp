@@ -24,7 +24,7 @@ constexpr std::size_t kBoxStride = 8;  // floats per body record: one 32-byte ha
 // From this many bodies on, the SoA bounds (24 bytes a body) outgrow the private L2, and the gather's six random
 // reads per body cost six misses; copying each box into one record during the key pass (sequential) leaves one.
 // Below it, the copy costs more than it saves.
-constexpr std::uint32_t kRecordsFrom = 0;
+constexpr std::uint32_t kRecordsFrom = 200000;
 // The binning cell is larger than the level's extent bound by this factor, so that rounding can never put two
 // touching bodies of one level two cells apart: extents are float differences (a true extent exceeds its rounded
 // value by at most 2^-24 of it), centres and cell coordinates doubles (relative error ~1e-16).
