@@ -2,7 +2,8 @@
 # Installs, from Debian's packages, whatever Rubble needs that this machine lacks. Safe to run again.
 set -euo pipefail
 packages=(cmake ninja-build g++ ccache clang-format
-          libtbb-dev libxsimd-dev libeigen3-dev libqhull-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev)
+          libtbb-dev libxsimd-dev libeigen3-dev libqhull-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev
+          libccd-dev)  # libccd: an independent collision library, used only by tests as an oracle
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
