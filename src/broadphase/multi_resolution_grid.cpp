@@ -283,7 +283,8 @@ void MultiResolutionGrid::gatherAndBuildRows(const Bounds& b, const Layout& layo
     cellCount_ = cells;
     maxBodiesPerCell_ = std::max(maxRun, open);
     rowKey_.resize(rows + 3);
-    rowBegin_.resize(rows + 1);
+    // Four ends past the last row: the three-row window starting at a sentinel row reads rowBegin[at + 3].
+    rowBegin_.resize(rows + 4);
     pool.forChunks(validCount, kBodyChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
         std::uint32_t r = chunkRowCount_[chunk];
         for (std::size_t s = begin; s < end; ++s) {
@@ -296,7 +297,7 @@ void MultiResolutionGrid::gatherAndBuildRows(const Bounds& b, const Layout& layo
     });
     // Sentinel rows that no search matches: they stop the cursor and the three-row window reads.
     rowKey_[rows] = rowKey_[rows + 1] = rowKey_[rows + 2] = kOutlierKey;
-    rowBegin_[rows] = validCount;
+    rowBegin_[rows] = rowBegin_[rows + 1] = rowBegin_[rows + 2] = rowBegin_[rows + 3] = validCount;
 }
 
 void MultiResolutionGrid::buildCoarseTable(const Layout& layout, std::uint32_t validCount) {
