@@ -20,25 +20,38 @@ constexpr float kSweepCandidatesForGrid = 300.0f;
 /// The choice only flips when the estimate crosses the threshold by this factor, so that a scene near the
 /// threshold does not throw away SAP's temporal coherence every other step.
 constexpr float kHysteresis = 1.5f;
+/// Scenes change slowly: `auto` looks again every this many steps, or sooner when the body count moves by 1/8.
+constexpr std::uint32_t kStepsBetweenChoices = 16;
+constexpr std::uint32_t kChoiceChunk = 16384;
+
+struct AxisSums {
+    double sum[3] = {}, sumSquares[3] = {}, width[3] = {};
+};
 
 }  // namespace
 
-BroadPhaseChoice chooseBroadPhase(const Bounds& b, BroadPhaseKind current) {
+BroadPhaseChoice chooseBroadPhase(const Bounds& b, BroadPhaseKind current, TaskPool& pool) {
     const std::uint32_t n = b.size();
     BroadPhaseChoice choice;
     choice.kind = current == BroadPhaseKind::Auto ? BroadPhaseKind::SweepAndPrune : current;
     if (n < 2) return choice;
-    // One sequential pass in double: the estimate, and so the choice, is the same on any thread count.
-    double sum[3] = {}, sumSquares[3] = {}, width[3] = {};
     const float* lo[3] = {b.minX.data(), b.minY.data(), b.minZ.data()};
     const float* hi[3] = {b.maxX.data(), b.maxY.data(), b.maxZ.data()};
-    for (int axis = 0; axis < 3; ++axis)
-        for (std::uint32_t i = 0; i < n; ++i) {
-            const double c = 0.5 * (double(lo[axis][i]) + double(hi[axis][i]));
-            sum[axis] += c;
-            sumSquares[axis] += c * c;
-            width[axis] += double(hi[axis][i]) - double(lo[axis][i]);
-        }
+    std::vector<AxisSums> chunks(TaskPool::chunkCount(n, kChoiceChunk));
+    pool.forChunks(n, kChoiceChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
+        AxisSums& s = chunks[chunk];
+        for (int axis = 0; axis < 3; ++axis)
+            for (std::size_t i = begin; i < end; ++i) {
+                const double c = 0.5 * (double(lo[axis][i]) + double(hi[axis][i]));
+                s.sum[axis] += c;
+                s.sumSquares[axis] += c * c;
+                s.width[axis] += double(hi[axis][i]) - double(lo[axis][i]);
+            }
+    });
+    double sum[3] = {}, sumSquares[3] = {}, width[3] = {};
+    for (const AxisSums& s : chunks)
+        for (int axis = 0; axis < 3; ++axis)
+            sum[axis] += s.sum[axis], sumSquares[axis] += s.sumSquares[axis], width[axis] += s.width[axis];
     int best = 0;
     double bestVariance = -1;
     for (int axis = 0; axis < 3; ++axis) {
@@ -122,8 +135,18 @@ void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage
     filter.flags = bodies.flags.data();
     filter.asleepBit = kFlagAsleep;
 
-    const BroadPhaseKind kind =
-        requested == BroadPhaseKind::Auto ? chooseBroadPhase(moving, lastKind_).kind : requested;
+    BroadPhaseKind kind = requested;
+    if (requested == BroadPhaseKind::Auto) {
+        const std::uint32_t n = moving.size();
+        const bool countMoved = n > countAtChoice_ + countAtChoice_ / 8 || n < countAtChoice_ - countAtChoice_ / 8;
+        if (stepsSinceChoice_ == 0 || stepsSinceChoice_ >= kStepsBetweenChoices || countMoved) {
+            lastChoice_ = chooseBroadPhase(moving, lastKind_, pool).kind;
+            stepsSinceChoice_ = 0;
+            countAtChoice_ = n;
+        }
+        ++stepsSinceChoice_;
+        kind = lastChoice_;
+    }
     if (kind == BroadPhaseKind::Grid) {
         grid_->findPairs(moving, filter, pool, out.moving);
     } else {

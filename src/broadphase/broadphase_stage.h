@@ -25,7 +25,8 @@ struct BroadPhaseChoice {
 };
 
 /// Picks SAP or the grid for these boxes. `current` adds hysteresis so the choice does not flip every step.
-BroadPhaseChoice chooseBroadPhase(const Bounds& bounds, BroadPhaseKind current);
+/// The statistics are summed in fixed chunks merged in order, so the choice is the same on any thread count.
+BroadPhaseChoice chooseBroadPhase(const Bounds& bounds, BroadPhaseKind current, TaskPool& pool);
 
 class BroadPhaseStage {
 public:
@@ -55,6 +56,9 @@ private:
     std::unique_ptr<MultiResolutionGrid> grid_;
     std::unique_ptr<StaticBvh> bvh_;
     BroadPhaseKind lastKind_ = BroadPhaseKind::SweepAndPrune;
+    BroadPhaseKind lastChoice_ = BroadPhaseKind::SweepAndPrune;  ///< what `auto` decided last time it looked
+    std::uint32_t stepsSinceChoice_ = 0;
+    std::uint32_t countAtChoice_ = 0;
     std::vector<std::uint32_t> pendingAdds_, pendingRemoves_;
     std::vector<std::uint32_t> staticCategory_, staticMask_;  ///< by static slot
     bool filtersDirty_ = true;

@@ -194,8 +194,11 @@ TEST(BroadPhaseStage, MatchesBruteForceWithChurnForEveryAlgorithm) {
 
 TEST(BroadPhaseStage, AutoPicksTheGridForDenseSweepsAndSapForSparseOnes) {
     // S4-like: 100k boxes in a 200 m cube meet ~600 others per sweep: the grid.
+    TaskPool one(1), two(2);
     const Bounds dense = test::makeScenario(test::Scenario::Uniform, 100000);
-    EXPECT_EQ(chooseBroadPhase(dense, BroadPhaseKind::Auto).kind, BroadPhaseKind::Grid);
+    EXPECT_EQ(chooseBroadPhase(dense, BroadPhaseKind::Auto, one).kind, BroadPhaseKind::Grid);
+    EXPECT_EQ(chooseBroadPhase(dense, BroadPhaseKind::Auto, one).sweepCandidatesPerBody,
+              chooseBroadPhase(dense, BroadPhaseKind::Auto, two).sweepCandidatesPerBody);
     // A long thin row of boxes meets about one other per sweep along its length: SAP.
     Bounds row;
     row.resize(1000);
@@ -203,7 +206,7 @@ TEST(BroadPhaseStage, AutoPicksTheGridForDenseSweepsAndSapForSparseOnes) {
         row.minX[i] = 2.0f * i, row.maxX[i] = 2.0f * i + 1;
         row.minY[i] = row.minZ[i] = 0, row.maxY[i] = row.maxZ[i] = 1;
     }
-    const BroadPhaseChoice choice = chooseBroadPhase(row, BroadPhaseKind::Auto);
+    const BroadPhaseChoice choice = chooseBroadPhase(row, BroadPhaseKind::Auto, one);
     EXPECT_EQ(choice.kind, BroadPhaseKind::SweepAndPrune);
     // Centres spread uniformly over 2000 m: n * width / spread = 1000 * 1 / 2000.
     EXPECT_NEAR(choice.sweepCandidatesPerBody, 0.5f, 0.01f);
