@@ -12,6 +12,7 @@
 #include "broadphase/broadphase_stage.h"
 #include "effects.h"
 #include "integrate.h"
+#include "narrowphase/narrowphase_stage.h"
 #include "parallel.h"
 #include "profile.h"
 #include "rubble/error.h"
@@ -131,6 +132,8 @@ struct World::Impl {
     detail::Bounds movingBounds;
     detail::BroadPhaseStage broadPhase;
     detail::CandidatePairs pairs;
+    detail::NarrowPhaseStage narrowPhase;
+    detail::Contacts contacts;
     std::vector<std::uint32_t> nonFinite;
     std::vector<BodyId> frozenReports;
 
@@ -693,6 +696,13 @@ void World::step(float dt) {
             profile.staticPairs = static_cast<std::uint32_t>(w.pairs.statics.size());
             profile.meshPairs = static_cast<std::uint32_t>(w.pairs.meshes.size());
             profile.meshTriangles = static_cast<std::uint32_t>(w.pairs.meshTriangles.size());
+            {
+                detail::StageTimer timer(profile, Stage::NarrowPhase, w.origin);
+                w.narrowPhase.run(w.pairs, w.bodies, w.shapes, w.settings.contactMargin, *w.pool, w.contacts);
+            }
+            profile.manifolds = static_cast<std::uint32_t>(w.contacts.manifolds.size());
+            profile.contactPoints = w.contacts.pointCount;
+            profile.unsupportedPairs = w.contacts.unsupportedPairs;
         }
         {
             detail::StageTimer timer(profile, Stage::IntegratePositions, w.origin);

@@ -213,9 +213,13 @@ int run(const Options& options) {
                         ? "did not run"
                         : std::string(rubble::broadPhaseName(last.broadPhase)).c_str(),
                     last.movingPairs, last.staticPairs, last.meshPairs, last.meshTriangles);
+        std::printf("narrow     %u manifolds, %u contact points", last.manifolds, last.contactPoints);
+        if (last.unsupportedPairs > 0)
+            std::printf("; %u pairs skipped: their shape kinds have no kernel yet", last.unsupportedPairs);
+        std::printf("\n");
         std::printf(
-            "note       the narrow phase and the solver are not built yet: pairs are found, but bodies still\n"
-            "           pass through each other, the ground and the terrain; the figures below show it.\n");
+            "note       the solver is not built yet: contacts are found, but bodies still pass through each\n"
+            "           other, the ground and the terrain; the figures below show it.\n");
     } else {
         std::printf("\nstep       median %.4f ms over %zu steps\n", stepMedian, stepMs.size());
     }

@@ -8,7 +8,14 @@
 namespace rubble {
 
 /// The stages of a step, in data order. Only stages that exist are listed; later stages join this list.
-enum class Stage : std::uint8_t { IntegrateVelocities, UpdateBounds, BroadPhase, IntegratePositions, Count };
+enum class Stage : std::uint8_t {
+    IntegrateVelocities,
+    UpdateBounds,
+    BroadPhase,
+    NarrowPhase,
+    IntegratePositions,
+    Count,
+};
 inline constexpr int kStageCount = static_cast<int>(Stage::Count);
 
 /// Stage name shared by the runner's table, the trace and the benchmark counters.
@@ -35,6 +42,9 @@ struct Profile {
     std::uint32_t staticPairs = 0;    ///< candidate pairs of a moving and a static body (meshes excluded)
     std::uint32_t meshPairs = 0;      ///< moving bodies against static meshes and heightfields
     std::uint32_t meshTriangles = 0;  ///< triangles handed over with the mesh pairs
+    std::uint32_t manifolds = 0;      ///< contact manifolds (touching or speculative pairs)
+    std::uint32_t contactPoints = 0;
+    std::uint32_t unsupportedPairs = 0;  ///< candidate pairs whose shape kinds have no narrow-phase kernel yet
 
     const StageTiming& operator[](Stage s) const { return stages[static_cast<int>(s)]; }
     StageTiming& operator[](Stage s) { return stages[static_cast<int>(s)]; }

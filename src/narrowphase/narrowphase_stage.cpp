@@ -1,0 +1,163 @@
+#include "narrowphase/narrowphase_stage.h"
+
+#include <algorithm>
+
+#include "narrowphase/box_box.h"
+#include "narrowphase/convex_pairs.h"
+#include "parallel.h"
+
+namespace rubble::detail {
+namespace {
+
+/// Pairs per parallel task: enough work to amortise a task, small enough for two threads to balance.
+constexpr std::size_t kChunk = 256;
+
+struct Posed {
+    Transform pose;  ///< of the shape's local origin
+    const Shape* shape;
+};
+
+Posed posed(const BodyStorage& storage, const std::vector<Shape>& shapes, std::uint32_t i, bool isStatic) {
+    if (isStatic) {
+        const StaticBodies& s = storage.statics;
+        return {{{s.px[i], s.py[i], s.pz[i]}, {s.qx[i], s.qy[i], s.qz[i], s.qw[i]}}, &shapes[s.shape[i]]};
+    }
+    const MovingBodies& m = storage.moving;
+    const Quat q{m.qx[i], m.qy[i], m.qz[i], m.qw[i]};
+    const Vec3 origin = Vec3{m.px[i], m.py[i], m.pz[i]} - rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]});
+    return {{origin, q}, &shapes[m.shape[i]]};
+}
+
+ShapeKind kindOf(const BodyStorage& storage, const std::vector<Shape>& shapes, std::uint32_t i, bool isStatic) {
+    return shapes[isStatic ? storage.statics.shape[i] : storage.moving.shape[i]].kind;
+}
+
+CapsuleSegment segmentOf(const Posed& p) { return capsuleSegmentOf(p.pose, p.shape->halfHeight, p.shape->radius); }
+
+/// One pair through its scalar kernel.
+void collide(PairKernel kernel, const Posed& a, const Posed& b, float margin, Manifold& out) {
+    out.pointCount = 0;
+    switch (kernel) {
+        case PairKernel::SphereSphere:
+            collideSpheres(a.pose.position, a.shape->radius, b.pose.position, b.shape->radius, margin, out);
+            break;
+        case PairKernel::SphereBox:
+            collideSphereBox(a.pose.position, a.shape->radius, b.pose, b.shape->halfExtents, margin, out);
+            break;
+        case PairKernel::SphereCapsule:
+            collideSphereCapsule(a.pose.position, a.shape->radius, segmentOf(b), margin, out);
+            break;
+        case PairKernel::BoxBox:
+            collideBoxes(a.pose, a.shape->halfExtents, b.pose, b.shape->halfExtents, margin, out);
+            break;
+        case PairKernel::CapsuleCapsule:
+            collideCapsules(segmentOf(a), segmentOf(b), margin, out);
+            break;
+        case PairKernel::Unsupported:
+        case PairKernel::Count:
+            break;
+    }
+}
+
+}  // namespace
+
+PairKernel pairKernel(ShapeKind lower, ShapeKind upper) {
+    using K = ShapeKind;
+    if (lower == K::Sphere) {
+        if (upper == K::Sphere) return PairKernel::SphereSphere;
+        if (upper == K::Box) return PairKernel::SphereBox;
+        if (upper == K::Capsule) return PairKernel::SphereCapsule;
+    }
+    if (lower == K::Box && upper == K::Box) return PairKernel::BoxBox;
+    if (lower == K::Capsule && upper == K::Capsule) return PairKernel::CapsuleCapsule;
+    return PairKernel::Unsupported;
+}
+
+void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& storage,
+                           const std::vector<Shape>& shapes, float margin, TaskPool& pool, Contacts& out) {
+    out.clear();
+    // Jobs in the candidates' canonical order: moving pairs, then moving-static pairs. A is the body whose shape
+    // kind is lower, so each kernel sees its shapes in its own argument order.
+    jobs_.clear();
+    auto addJob = [&](std::uint32_t first, bool firstStatic, std::uint32_t second, bool secondStatic) {
+        const ShapeKind k1 = kindOf(storage, shapes, first, firstStatic);
+        const ShapeKind k2 = kindOf(storage, shapes, second, secondStatic);
+        Job job;
+        if (k2 < k1) {
+            job.pair = {second, first, secondStatic, firstStatic};
+            job.kernel = pairKernel(k2, k1);
+        } else {
+            job.pair = {first, second, firstStatic, secondStatic};
+            job.kernel = pairKernel(k1, k2);
+        }
+        jobs_.push_back(job);
+    };
+    for (const BodyPair& p : candidates.moving) addJob(p.a, false, p.b, false);
+    for (const BodyPair& p : candidates.statics) addJob(p.a, false, p.b, true);
+    // Mesh pairs wait for the triangle kernels.
+    out.unsupportedPairs = static_cast<std::uint32_t>(candidates.meshes.size());
+
+    for (auto& bucket : bucket_) bucket.clear();
+    for (std::uint32_t j = 0; j < jobs_.size(); ++j) bucket_[static_cast<int>(jobs_[j].kernel)].push_back(j);
+    out.unsupportedPairs += static_cast<std::uint32_t>(bucket_[static_cast<int>(PairKernel::Unsupported)].size());
+    perJob_.resize(jobs_.size());
+
+    // Sphere-sphere: gathered into SoA and run in SIMD lanes.
+    const std::vector<std::uint32_t>& spheres = bucket_[static_cast<int>(PairKernel::SphereSphere)];
+    if (!spheres.empty()) {
+        const std::size_t n = spheres.size();
+        for (auto& a : sphereIn_) a.resize(n);
+        for (auto& a : sphereOut_) a.resize(n);
+        sphereFeature_.resize(n);
+        sphereCount_.resize(n);
+        pool.forChunks(n, kChunk * 4, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+            for (std::size_t k = begin; k < end; ++k) {
+                const ContactPair& p = jobs_[spheres[k]].pair;
+                const Posed a = posed(storage, shapes, p.a, p.aStatic), b = posed(storage, shapes, p.b, p.bStatic);
+                sphereIn_[0][k] = a.pose.position.x, sphereIn_[1][k] = a.pose.position.y;
+                sphereIn_[2][k] = a.pose.position.z, sphereIn_[3][k] = a.shape->radius;
+                sphereIn_[4][k] = b.pose.position.x, sphereIn_[5][k] = b.pose.position.y;
+                sphereIn_[6][k] = b.pose.position.z, sphereIn_[7][k] = b.shape->radius;
+            }
+            const SpherePairs in{sphereIn_[0].data() + begin, sphereIn_[1].data() + begin, sphereIn_[2].data() + begin,
+                                 sphereIn_[3].data() + begin, sphereIn_[4].data() + begin, sphereIn_[5].data() + begin,
+                                 sphereIn_[6].data() + begin, sphereIn_[7].data() + begin};
+            PairContacts result{
+                sphereOut_[0].data() + begin, sphereOut_[1].data() + begin,  sphereOut_[2].data() + begin,
+                sphereOut_[3].data() + begin, sphereOut_[4].data() + begin,  sphereOut_[5].data() + begin,
+                sphereOut_[6].data() + begin, sphereFeature_.data() + begin, sphereCount_.data() + begin};
+            collideSpheresBatch(in, end - begin, margin, result);
+            for (std::size_t k = begin; k < end; ++k) {
+                Manifold& m = perJob_[spheres[k]];
+                m.pointCount = sphereCount_[k];
+                m.normal = {sphereOut_[0][k], sphereOut_[1][k], sphereOut_[2][k]};
+                m.points[0] = {
+                    {sphereOut_[3][k], sphereOut_[4][k], sphereOut_[5][k]}, sphereOut_[6][k], sphereFeature_[k]};
+            }
+        });
+    }
+
+    // Every other kernel: one pair at a time, in parallel chunks of its bucket.
+    for (int kernel = 0; kernel < static_cast<int>(PairKernel::Unsupported); ++kernel) {
+        if (kernel == static_cast<int>(PairKernel::SphereSphere)) continue;
+        const std::vector<std::uint32_t>& bucket = bucket_[kernel];
+        pool.forChunks(bucket.size(), kChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+            for (std::size_t k = begin; k < end; ++k) {
+                const Job& job = jobs_[bucket[k]];
+                collide(job.kernel, posed(storage, shapes, job.pair.a, job.pair.aStatic),
+                        posed(storage, shapes, job.pair.b, job.pair.bStatic), margin, perJob_[bucket[k]]);
+            }
+        });
+    }
+    for (std::uint32_t j : bucket_[static_cast<int>(PairKernel::Unsupported)]) perJob_[j].pointCount = 0;
+
+    // Compact in job order: the output does not depend on buckets, chunks or threads.
+    for (std::uint32_t j = 0; j < jobs_.size(); ++j) {
+        if (perJob_[j].pointCount == 0) continue;
+        out.pairs.push_back(jobs_[j].pair);
+        out.manifolds.push_back(perJob_[j]);
+        out.pointCount += static_cast<std::uint32_t>(perJob_[j].pointCount);
+    }
+}
+
+}  // namespace rubble::detail

@@ -1,0 +1,77 @@
+#pragma once
+// The narrow-phase stage: candidate pairs from the broad phase become contact manifolds. Pairs are bucketed by
+// shape-kind pair; each bucket runs one kernel over its pairs in parallel chunks (sphere-sphere in SIMD lanes),
+// and the manifolds come out in the candidates' canonical order whatever the thread count.
+#include <cstdint>
+#include <vector>
+
+#include "body_storage.h"
+#include "broadphase/broadphase.h"
+#include "narrowphase/manifold.h"
+#include "shapes/shape.h"
+
+namespace rubble::detail {
+
+class TaskPool;
+
+/// The two bodies of a manifold, in the order the kernel saw them: A has the lower ShapeKind, so the normal
+/// points from A to B. Each side is a dense index into MovingBodies, or into StaticBodies when flagged static.
+struct ContactPair {
+    std::uint32_t a = 0;
+    std::uint32_t b = 0;
+    bool aStatic = false;
+    bool bStatic = false;
+};
+
+/// The stage's output: one manifold (with at least one point) per touching or nearly touching pair.
+struct Contacts {
+    std::vector<ContactPair> pairs;
+    std::vector<Manifold> manifolds;
+    std::uint32_t pointCount = 0;
+    /// Candidate pairs whose shape kinds have no kernel yet (hulls, compounds, capsule-box, meshes). They are
+    /// counted here and shown by the runner, never silently treated as apart.
+    std::uint32_t unsupportedPairs = 0;
+
+    void clear() {
+        pairs.clear();
+        manifolds.clear();
+        pointCount = 0;
+        unsupportedPairs = 0;
+    }
+};
+
+/// Shape-pair kinds that have a kernel. The lower ShapeKind comes first.
+enum class PairKernel : std::uint8_t {
+    SphereSphere,
+    SphereBox,
+    SphereCapsule,
+    BoxBox,
+    CapsuleCapsule,
+    Unsupported,
+    Count
+};
+
+/// The kernel for two shape kinds given in ascending order.
+PairKernel pairKernel(ShapeKind lower, ShapeKind upper);
+
+class NarrowPhaseStage {
+public:
+    /// Manifolds for every candidate pair within `margin` (speculative points included).
+    void run(const CandidatePairs& candidates, const BodyStorage& storage, const std::vector<Shape>& shapes,
+             float margin, TaskPool& pool, Contacts& out);
+
+private:
+    struct Job {
+        ContactPair pair;
+        PairKernel kernel = PairKernel::Unsupported;
+    };
+    std::vector<Job> jobs_;
+    std::vector<Manifold> perJob_;
+    std::vector<std::uint32_t> bucket_[static_cast<int>(PairKernel::Count)];
+    // SoA scratch for the batched sphere-sphere kernel.
+    std::vector<float> sphereIn_[8], sphereOut_[7];
+    std::vector<std::uint32_t> sphereFeature_;
+    std::vector<std::int32_t> sphereCount_;
+};
+
+}  // namespace rubble::detail
