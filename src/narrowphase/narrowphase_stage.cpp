@@ -2,9 +2,12 @@
 
 #include <algorithm>
 
+#include "broadphase/static_bvh.h"
 #include "narrowphase/box_box.h"
 #include "narrowphase/convex_pairs.h"
+#include "narrowphase/triangle_pairs.h"
 #include "parallel.h"
+#include "shapes/mesh_adjacency.h"
 
 namespace rubble::detail {
 namespace {
@@ -34,9 +37,27 @@ ShapeKind kindOf(const BodyStorage& storage, const std::vector<Shape>& shapes, s
 
 CapsuleSegment segmentOf(const Posed& p) { return capsuleSegmentOf(p.pose, p.shape->halfHeight, p.shape->radius); }
 
-/// One pair through its scalar kernel.
-void collide(PairKernel kernel, const Posed& a, const Posed& b, float margin, Manifold& out) {
+/// World vertices and active-edge mask of triangle t of a static mesh or heightfield.
+void triangleOf(const Posed& mesh, std::uint32_t t, TriangleVertices& vertices, std::uint8_t& activeEdges) {
+    if (mesh.shape->kind == ShapeKind::TriangleMesh) {
+        const TriangleMesh& m = *mesh.shape->mesh;
+        for (int k = 0; k < 3; ++k) vertices[k] = apply(mesh.pose, m.vertices[m.indices[3 * std::size_t(t) + k]]);
+        activeEdges = m.activeEdges.empty() ? kAllEdgesActive : m.activeEdges[t];
+    } else {
+        const std::array<Vec3, 3> local = heightfieldTriangle(*mesh.shape->heightfield, t);
+        for (int k = 0; k < 3; ++k) vertices[k] = apply(mesh.pose, local[k]);
+        activeEdges = heightfieldActiveEdges(*mesh.shape->heightfield, t);
+    }
+}
+
+/// One pair through its scalar kernel; for triangle kernels B is the mesh and `triangle` picks the triangle.
+void collide(PairKernel kernel, const Posed& a, const Posed& b, std::uint32_t triangle, float margin, Manifold& out) {
     out.pointCount = 0;
+    TriangleVertices tri;
+    std::uint8_t active = 0;
+    if (kernel == PairKernel::SphereTriangle || kernel == PairKernel::CapsuleTriangle ||
+        kernel == PairKernel::BoxTriangle)
+        triangleOf(b, triangle, tri, active);
     switch (kernel) {
         case PairKernel::SphereSphere:
             collideSpheres(a.pose.position, a.shape->radius, b.pose.position, b.shape->radius, margin, out);
@@ -52,6 +73,15 @@ void collide(PairKernel kernel, const Posed& a, const Posed& b, float margin, Ma
             break;
         case PairKernel::CapsuleCapsule:
             collideCapsules(segmentOf(a), segmentOf(b), margin, out);
+            break;
+        case PairKernel::SphereTriangle:
+            collideSphereTriangle(a.pose.position, a.shape->radius, tri, active, margin, out);
+            break;
+        case PairKernel::CapsuleTriangle:
+            collideCapsuleTriangle(segmentOf(a), tri, active, margin, out);
+            break;
+        case PairKernel::BoxTriangle:
+            collideBoxTriangle(a.pose, a.shape->halfExtents, tri, active, margin, out);
             break;
         case PairKernel::Unsupported:
         case PairKernel::Count:
@@ -70,6 +100,11 @@ PairKernel pairKernel(ShapeKind lower, ShapeKind upper) {
     }
     if (lower == K::Box && upper == K::Box) return PairKernel::BoxBox;
     if (lower == K::Capsule && upper == K::Capsule) return PairKernel::CapsuleCapsule;
+    if (upper == K::TriangleMesh || upper == K::Heightfield) {
+        if (lower == K::Sphere) return PairKernel::SphereTriangle;
+        if (lower == K::Capsule) return PairKernel::CapsuleTriangle;
+        if (lower == K::Box) return PairKernel::BoxTriangle;
+    }
     return PairKernel::Unsupported;
 }
 
@@ -94,12 +129,21 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
     };
     for (const BodyPair& p : candidates.moving) addJob(p.a, false, p.b, false);
     for (const BodyPair& p : candidates.statics) addJob(p.a, false, p.b, true);
-    // Mesh pairs wait for the triangle kernels.
-    out.unsupportedPairs = static_cast<std::uint32_t>(candidates.meshes.size());
+    // A body against a mesh: one job per triangle the broad phase handed over, the body as A.
+    for (const MeshPair& p : candidates.meshes) {
+        const PairKernel kernel =
+            pairKernel(kindOf(storage, shapes, p.moving, false), kindOf(storage, shapes, p.staticBody, true));
+        for (std::uint32_t k = 0; k < p.triangleCount; ++k) {
+            Job job;
+            job.pair = {p.moving, p.staticBody, false, true, candidates.meshTriangles[p.firstTriangle + k]};
+            job.kernel = kernel;
+            jobs_.push_back(job);
+        }
+    }
 
     for (auto& bucket : bucket_) bucket.clear();
     for (std::uint32_t j = 0; j < jobs_.size(); ++j) bucket_[static_cast<int>(jobs_[j].kernel)].push_back(j);
-    out.unsupportedPairs += static_cast<std::uint32_t>(bucket_[static_cast<int>(PairKernel::Unsupported)].size());
+    out.unsupportedPairs = static_cast<std::uint32_t>(bucket_[static_cast<int>(PairKernel::Unsupported)].size());
     perJob_.resize(jobs_.size());
 
     // Sphere-sphere: gathered into SoA and run in SIMD lanes.
@@ -145,7 +189,8 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             for (std::size_t k = begin; k < end; ++k) {
                 const Job& job = jobs_[bucket[k]];
                 collide(job.kernel, posed(storage, shapes, job.pair.a, job.pair.aStatic),
-                        posed(storage, shapes, job.pair.b, job.pair.bStatic), margin, perJob_[bucket[k]]);
+                        posed(storage, shapes, job.pair.b, job.pair.bStatic), job.pair.triangle, margin,
+                        perJob_[bucket[k]]);
             }
         });
     }

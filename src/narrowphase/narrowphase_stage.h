@@ -21,6 +21,8 @@ struct ContactPair {
     std::uint32_t b = 0;
     bool aStatic = false;
     bool bStatic = false;
+    /// For a body against a static mesh or heightfield (B): the triangle; ~0u otherwise.
+    std::uint32_t triangle = ~0u;
 };
 
 /// The stage's output: one manifold (with at least one point) per touching or nearly touching pair.
@@ -28,7 +30,7 @@ struct Contacts {
     std::vector<ContactPair> pairs;
     std::vector<Manifold> manifolds;
     std::uint32_t pointCount = 0;
-    /// Candidate pairs whose shape kinds have no kernel yet (hulls, compounds, capsule-box, meshes). They are
+    /// Candidate pairs whose shape kinds have no kernel yet (hulls, compounds, capsule-box). They are
     /// counted here and shown by the runner, never silently treated as apart.
     std::uint32_t unsupportedPairs = 0;
 
@@ -47,6 +49,9 @@ enum class PairKernel : std::uint8_t {
     SphereCapsule,
     BoxBox,
     CapsuleCapsule,
+    SphereTriangle,
+    CapsuleTriangle,
+    BoxTriangle,
     Unsupported,
     Count
 };

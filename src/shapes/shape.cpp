@@ -10,6 +10,7 @@
 #include <string>
 
 #include "rubble/error.h"
+#include "shapes/mesh_adjacency.h"
 
 namespace rubble::detail {
 
@@ -169,6 +170,7 @@ struct Builder {
         Shape s;
         s.kind = ShapeKind::TriangleMesh;
         auto mesh = std::make_shared<TriangleMesh>(buildTriangleMesh(def));
+        mesh->activeEdges = buildMeshAdjacency(*mesh).activeEdges;
         s.localBounds = mesh->bounds;
         s.mesh = std::move(mesh);
         return s;

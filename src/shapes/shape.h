@@ -38,6 +38,9 @@ struct TriangleMesh {
     std::uint32_t cellsX = 0, cellsZ = 0;
     std::vector<std::uint32_t> cellStart;  ///< size cellsX * cellsZ + 1
     std::vector<std::uint32_t> cellTriangles;
+    /// Per triangle, bit e set when its edge e (vertex e to e + 1) is a boundary or convex edge. Contacts on the
+    /// other (flat or concave) edges take the face normal, so bodies slide over internal edges without bumps.
+    std::vector<std::uint8_t> activeEdges;
     std::uint32_t triangleCount() const { return static_cast<std::uint32_t>(indices.size() / 3); }
 };
 

@@ -176,3 +176,42 @@ TEST(NarrowPhaseStage, OutputDoesNotDependOnTheThreadCount) {
         }
     }
 }
+
+TEST(NarrowPhaseStage, BodiesOnAFlatMeshTouchItWithTheFaceNormalEvenOverInternalEdges) {
+    // A flat 8 x 8 grid mesh, two triangles per cell. Bodies rest on it at positions that put their contacts
+    // exactly on internal edges and vertices; the mesh's active-edge masks must make every normal the face's.
+    Scene scene;
+    BroadPhaseStage broad;
+    TriangleMeshDef grid;
+    for (int r = 0; r <= 8; ++r)
+        for (int c = 0; c <= 8; ++c) grid.vertices.push_back({float(c) - 4, 0, float(r) - 4});
+    for (std::uint32_t r = 0; r < 8; ++r)
+        for (std::uint32_t c = 0; c < 8; ++c) {
+            const std::uint32_t a = r * 9 + c, b = a + 1, d = a + 9, e = d + 1;
+            grid.indices.insert(grid.indices.end(), {a, d, e, a, e, b});
+        }
+    const std::uint32_t mesh = scene.addShape(grid);
+    const std::uint32_t ball = scene.addShape(SphereDef{0.5f}), cube = scene.addShape(BoxDef{{0.5f, 0.5f, 0.5f}}),
+                        pill = scene.addShape(CapsuleDef{0.3f, 0.5f});
+    scene.addStatic(mesh, {0, 0, 0}, broad);
+    const float sink = 0.01f;  // slightly into the floor
+    const float xs[] = {-2.0f, -1.0f, 0.0f, 0.5f, 1.25f, 2.0f};
+    for (float x : xs)
+        for (float z : xs) {
+            scene.addMoving(ball, {x, 0.5f - sink, z}, {});
+            scene.addMoving(cube, {x + 0.01f, 0.5f - sink, z + 0.013f}, {});
+            scene.addMoving(pill, {x, 0.8f - sink, z}, Quat::fromAxisAngle({0, 0, 1}, 1.5707964f));
+        }
+    CandidatePairs candidates;
+    const Contacts contacts = runStages(scene, broad, 2, 0.02f, candidates);
+    int meshContacts = 0;
+    for (std::size_t k = 0; k < contacts.pairs.size(); ++k) {
+        if (!contacts.pairs[k].bStatic) continue;
+        ++meshContacts;
+        const Vec3 n = contacts.manifolds[k].normal;  // from the body to the triangle: straight down
+        EXPECT_NEAR(n.y, -1.0f, 1e-4f) << "pair " << k << " triangle " << contacts.pairs[k].triangle;
+        for (int p = 0; p < contacts.manifolds[k].pointCount; ++p)
+            EXPECT_NEAR(contacts.manifolds[k].points[p].depth, sink, 1e-4f);
+    }
+    EXPECT_GT(meshContacts, 108) << "every body touches at least one triangle";
+}
