@@ -31,8 +31,17 @@ Posed posed(const BodyStorage& storage, const std::vector<Shape>& shapes, std::u
     return {{origin, q}, &shapes[m.shape[i]]};
 }
 
-ShapeKind kindOf(const BodyStorage& storage, const std::vector<Shape>& shapes, std::uint32_t i, bool isStatic) {
-    return shapes[isStatic ? storage.statics.shape[i] : storage.moving.shape[i]].kind;
+const Shape& shapeOf(const BodyStorage& storage, const std::vector<Shape>& shapes, std::uint32_t i, bool isStatic) {
+    return shapes[isStatic ? storage.statics.shape[i] : storage.moving.shape[i]];
+}
+
+/// A side of a contact pair: the body's shape, or the compound child the pair names, posed in the world.
+Posed posedSide(const BodyStorage& storage, const std::vector<Shape>& shapes, const ContactPair& p, bool sideB) {
+    Posed body = sideB ? posed(storage, shapes, p.b, p.bStatic) : posed(storage, shapes, p.a, p.aStatic);
+    const std::uint16_t child = sideB ? p.childB : p.childA;
+    if (child == kNoChild) return body;
+    const CompoundChild& c = body.shape->children[child];
+    return {{apply(body.pose, c.local.position), body.pose.rotation * c.local.rotation}, c.shape.get()};
 }
 
 CapsuleSegment segmentOf(const Posed& p) { return capsuleSegmentOf(p.pose, p.shape->halfHeight, p.shape->radius); }
@@ -114,32 +123,36 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
     // Jobs in the candidates' canonical order: moving pairs, then moving-static pairs. A is the body whose shape
     // kind is lower, so each kernel sees its shapes in its own argument order.
     jobs_.clear();
-    auto addJob = [&](std::uint32_t first, bool firstStatic, std::uint32_t second, bool secondStatic) {
-        const ShapeKind k1 = kindOf(storage, shapes, first, firstStatic);
-        const ShapeKind k2 = kindOf(storage, shapes, second, secondStatic);
-        Job job;
-        if (k2 < k1) {
-            job.pair = {second, first, secondStatic, firstStatic};
-            job.kernel = pairKernel(k2, k1);
-        } else {
-            job.pair = {first, second, firstStatic, secondStatic};
-            job.kernel = pairKernel(k1, k2);
-        }
-        jobs_.push_back(job);
+    // Compounds expand into one job per child (per child pair for two compounds), in child order.
+    auto addJob = [&](std::uint32_t first, bool firstStatic, std::uint32_t second, bool secondStatic,
+                      std::uint32_t triangle) {
+        const Shape& s1 = shapeOf(storage, shapes, first, firstStatic);
+        const Shape& s2 = shapeOf(storage, shapes, second, secondStatic);
+        const bool compound1 = s1.kind == ShapeKind::Compound, compound2 = s2.kind == ShapeKind::Compound;
+        const std::size_t n1 = compound1 ? s1.children.size() : 1, n2 = compound2 ? s2.children.size() : 1;
+        for (std::size_t c1 = 0; c1 < n1; ++c1)
+            for (std::size_t c2 = 0; c2 < n2; ++c2) {
+                const ShapeKind k1 = compound1 ? s1.children[c1].shape->kind : s1.kind;
+                const ShapeKind k2 = compound2 ? s2.children[c2].shape->kind : s2.kind;
+                const auto child1 = compound1 ? static_cast<std::uint16_t>(c1) : kNoChild;
+                const auto child2 = compound2 ? static_cast<std::uint16_t>(c2) : kNoChild;
+                Job job;
+                if (k2 < k1) {
+                    job.pair = {second, first, secondStatic, firstStatic, triangle, child2, child1};
+                    job.kernel = pairKernel(k2, k1);
+                } else {
+                    job.pair = {first, second, firstStatic, secondStatic, triangle, child1, child2};
+                    job.kernel = pairKernel(k1, k2);
+                }
+                jobs_.push_back(job);
+            }
     };
-    for (const BodyPair& p : candidates.moving) addJob(p.a, false, p.b, false);
-    for (const BodyPair& p : candidates.statics) addJob(p.a, false, p.b, true);
-    // A body against a mesh: one job per triangle the broad phase handed over, the body as A.
-    for (const MeshPair& p : candidates.meshes) {
-        const PairKernel kernel =
-            pairKernel(kindOf(storage, shapes, p.moving, false), kindOf(storage, shapes, p.staticBody, true));
-        for (std::uint32_t k = 0; k < p.triangleCount; ++k) {
-            Job job;
-            job.pair = {p.moving, p.staticBody, false, true, candidates.meshTriangles[p.firstTriangle + k]};
-            job.kernel = kernel;
-            jobs_.push_back(job);
-        }
-    }
+    for (const BodyPair& p : candidates.moving) addJob(p.a, false, p.b, false, ~0u);
+    for (const BodyPair& p : candidates.statics) addJob(p.a, false, p.b, true, ~0u);
+    // A body against a mesh: one job per triangle the broad phase handed over (the mesh is always B).
+    for (const MeshPair& p : candidates.meshes)
+        for (std::uint32_t k = 0; k < p.triangleCount; ++k)
+            addJob(p.moving, false, p.staticBody, true, candidates.meshTriangles[p.firstTriangle + k]);
 
     for (auto& bucket : bucket_) bucket.clear();
     for (std::uint32_t j = 0; j < jobs_.size(); ++j) bucket_[static_cast<int>(jobs_[j].kernel)].push_back(j);
@@ -157,7 +170,7 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
         pool.forChunks(n, kChunk * 4, [&](std::size_t, std::size_t begin, std::size_t end, int) {
             for (std::size_t k = begin; k < end; ++k) {
                 const ContactPair& p = jobs_[spheres[k]].pair;
-                const Posed a = posed(storage, shapes, p.a, p.aStatic), b = posed(storage, shapes, p.b, p.bStatic);
+                const Posed a = posedSide(storage, shapes, p, false), b = posedSide(storage, shapes, p, true);
                 sphereIn_[0][k] = a.pose.position.x, sphereIn_[1][k] = a.pose.position.y;
                 sphereIn_[2][k] = a.pose.position.z, sphereIn_[3][k] = a.shape->radius;
                 sphereIn_[4][k] = b.pose.position.x, sphereIn_[5][k] = b.pose.position.y;
@@ -188,9 +201,8 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
         pool.forChunks(bucket.size(), kChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
             for (std::size_t k = begin; k < end; ++k) {
                 const Job& job = jobs_[bucket[k]];
-                collide(job.kernel, posed(storage, shapes, job.pair.a, job.pair.aStatic),
-                        posed(storage, shapes, job.pair.b, job.pair.bStatic), job.pair.triangle, margin,
-                        perJob_[bucket[k]]);
+                collide(job.kernel, posedSide(storage, shapes, job.pair, false),
+                        posedSide(storage, shapes, job.pair, true), job.pair.triangle, margin, perJob_[bucket[k]]);
             }
         });
     }

@@ -14,8 +14,11 @@ namespace rubble::detail {
 
 class TaskPool;
 
+inline constexpr std::uint16_t kNoChild = 0xFFFF;
+
 /// The two bodies of a manifold, in the order the kernel saw them: A has the lower ShapeKind, so the normal
-/// points from A to B. Each side is a dense index into MovingBodies, or into StaticBodies when flagged static.
+/// points from A to B. Each side is a dense index into MovingBodies, or into StaticBodies when flagged static;
+/// for a compound, `childA` / `childB` name the child whose shape made the contact.
 struct ContactPair {
     std::uint32_t a = 0;
     std::uint32_t b = 0;
@@ -23,6 +26,8 @@ struct ContactPair {
     bool bStatic = false;
     /// For a body against a static mesh or heightfield (B): the triangle; ~0u otherwise.
     std::uint32_t triangle = ~0u;
+    std::uint16_t childA = kNoChild;
+    std::uint16_t childB = kNoChild;
 };
 
 /// The stage's output: one manifold (with at least one point) per touching or nearly touching pair.
@@ -30,7 +35,7 @@ struct Contacts {
     std::vector<ContactPair> pairs;
     std::vector<Manifold> manifolds;
     std::uint32_t pointCount = 0;
-    /// Candidate pairs whose shape kinds have no kernel yet (hulls, compounds, capsule-box). They are
+    /// Candidate pairs (or compound child pairs) whose shape kinds have no kernel yet (hulls, capsule-box). They are
     /// counted here and shown by the runner, never silently treated as apart.
     std::uint32_t unsupportedPairs = 0;
 

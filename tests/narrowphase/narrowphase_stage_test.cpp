@@ -215,3 +215,48 @@ TEST(NarrowPhaseStage, BodiesOnAFlatMeshTouchItWithTheFaceNormalEvenOverInternal
     }
     EXPECT_GT(meshContacts, 108) << "every body touches at least one triangle";
 }
+
+TEST(NarrowPhaseStage, CompoundChildrenCollideLikeTheSameShapesAsSeparateBodies) {
+    // A sphere and a turned box joined in a compound, tilted and sunk into a ground box, against the same two
+    // shapes placed as separate bodies at the children's world poses: the manifolds must agree (up to the
+    // rounding of the compound's origin, which is stored through its centre of mass).
+    const Transform sphereLocal{{-1, 0, 0}, {}};
+    const Transform boxLocal{{1, 0.1f, 0}, Quat::fromAxisAngle({0, 1, 0}, 0.5f)};
+    const Transform body{{0.3f, 0.1f, -0.2f}, Quat::fromAxisAngle({0, 0, 1}, -0.2f)};
+
+    auto run = [&](bool asCompound, std::vector<ContactPair>& pairs) {
+        Scene scene;
+        BroadPhaseStage broad;
+        const std::uint32_t ground = scene.addShape(BoxDef{{10, 0.5f, 10}});
+        scene.addStatic(ground, {0, -0.5f, 0}, broad);
+        if (asCompound) {
+            CompoundDef compound;
+            compound.children.push_back({SphereDef{0.5f}, sphereLocal});
+            compound.children.push_back({BoxDef{{0.3f, 0.3f, 0.3f}}, boxLocal});
+            scene.addMoving(scene.addShape(compound), body.position, body.rotation);
+        } else {
+            scene.addMoving(scene.addShape(SphereDef{0.5f}), apply(body, sphereLocal.position), body.rotation);
+            scene.addMoving(scene.addShape(BoxDef{{0.3f, 0.3f, 0.3f}}), apply(body, boxLocal.position),
+                            body.rotation * boxLocal.rotation);
+        }
+        CandidatePairs candidates;
+        Contacts contacts = runStages(scene, broad, 1, 0.02f, candidates);
+        pairs = contacts.pairs;
+        return contacts.manifolds;
+    };
+    std::vector<ContactPair> compoundPairs, separatePairs;
+    const std::vector<Manifold> compound = run(true, compoundPairs), separate = run(false, separatePairs);
+    ASSERT_EQ(compound.size(), 2u);
+    ASSERT_EQ(separate.size(), 2u);
+    EXPECT_EQ(compoundPairs[0].childA, 0);  // the sphere child, against the ground (B)
+    EXPECT_EQ(compoundPairs[1].childA, 1);  // the box child against the ground box: same kind, candidate order
+    for (int k = 0; k < 2; ++k) {
+        ASSERT_EQ(compound[k].pointCount, separate[k].pointCount) << k;
+        EXPECT_NEAR(compound[k].normal.y, separate[k].normal.y, 1e-5f);
+        for (int p = 0; p < compound[k].pointCount; ++p) {
+            EXPECT_NEAR(compound[k].points[p].depth, separate[k].points[p].depth, 1e-5f) << k << " " << p;
+            EXPECT_NEAR(compound[k].points[p].position.x, separate[k].points[p].position.x, 1e-5f);
+            EXPECT_NEAR(compound[k].points[p].position.z, separate[k].points[p].position.z, 1e-5f);
+        }
+    }
+}
