@@ -1,0 +1,676 @@
+// Hull-hull, box-hull, capsule-box and capsule-hull contact: SAT with Gauss-map pruning of edge pairs (Gregorius),
+// reference-face clipping and reduction to four points; GJK on the cores for capsules. See hull_pairs.h.
+#include "narrowphase/hull_pairs.h"
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "narrowphase/box_box.h"
+#include "narrowphase/clip.h"
+#include "narrowphase/gjk.h"
+#include "shapes/shape.h"
+
+namespace rubble::detail {
+namespace {
+
+/// Rotation matrix of a unit quaternion (rows), cheaper than quaternion rotation when applied many times.
+struct Rot {
+    Vec3 row[3];
+    Vec3 operator*(Vec3 v) const { return {dot(row[0], v), dot(row[1], v), dot(row[2], v)}; }
+};
+
+Rot toRot(Quat q) {
+    const float xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
+    const float xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
+    const float wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
+    return {{{1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)},
+             {2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)},
+             {2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)}}};
+}
+
+inline float minf(float x, float y) { return x < y ? x : y; }
+inline float maxf(float x, float y) { return x > y ? x : y; }
+inline float clamp01(float x) { return x < 0 ? 0.0f : (x > 1 ? 1.0f : x); }
+
+/// What the kernels read of a hull: plain pointers, so that the box can be served from stack data.
+struct HullView {
+    const Vec3* vertices;
+    int vertexCount;
+    const std::uint32_t* faceVertices;
+    const std::uint32_t* faceStart;
+    const Vec3* normals;
+    const float* offsets;
+    int faceCount;
+    const HullEdge* edges;
+    int edgeCount;
+    Vec3 interior;
+    float size;
+};
+
+HullView viewOf(const ConvexHull& h, const HullAdjacency& adj) {
+    return {h.vertices.data(),
+            static_cast<int>(h.vertices.size()),
+            h.faceVertices.data(),
+            h.faceStart.data(),
+            h.faceNormals.data(),
+            h.faceOffsets.data(),
+            static_cast<int>(h.faceNormals.size()),
+            adj.edges.data(),
+            static_cast<int>(adj.edges.size()),
+            adj.interior,
+            adj.size};
+}
+
+// ---- The unit cube, numbered like box_box.h: vertex i has sign bits x = bit 0, y = bit 1, z = bit 2 (set = +);
+// face 2 * axis + (1 if -axis), counter-clockwise from outside.
+struct UnitCube {
+    ConvexHull hull;
+    HullAdjacency adjacency;
+    UnitCube() {
+        for (int i = 0; i < 8; ++i)
+            hull.vertices.push_back({i & 1 ? 1.0f : -1.0f, i & 2 ? 1.0f : -1.0f, i & 4 ? 1.0f : -1.0f});
+        static constexpr std::uint32_t kFaces[6][4] = {{1, 3, 7, 5}, {0, 4, 6, 2}, {2, 6, 7, 3},
+                                                       {0, 1, 5, 4}, {4, 5, 7, 6}, {0, 2, 3, 1}};
+        for (int f = 0; f < 6; ++f) {
+            hull.faceStart.push_back(static_cast<std::uint32_t>(hull.faceVertices.size()));
+            for (std::uint32_t v : kFaces[f]) hull.faceVertices.push_back(v);
+            Vec3 n{};
+            (&n.x)[f / 2] = f % 2 ? -1.0f : 1.0f;
+            hull.faceNormals.push_back(n);
+            hull.faceOffsets.push_back(1);
+        }
+        hull.faceStart.push_back(static_cast<std::uint32_t>(hull.faceVertices.size()));
+        // The 12 edges: along axis k from the vertex with bit k clear.
+        for (int k = 0; k < 3; ++k)
+            for (std::uint32_t i = 0; i < 8; ++i)
+                if (!(i & (1u << k))) hull.edges.push_back(i), hull.edges.push_back(i | (1u << k));
+        adjacency = buildHullAdjacency(hull);
+    }
+};
+
+const UnitCube& unitCube() {
+    static const UnitCube cube;
+    return cube;
+}
+
+/// A box of half extents `half` as a hull view over caller-provided storage for its vertices and offsets.
+HullView boxView(Vec3 half, Vec3 (&vertices)[8], float (&offsets)[6]) {
+    const UnitCube& c = unitCube();
+    for (int i = 0; i < 8; ++i) {
+        const Vec3 u = c.hull.vertices[i];
+        vertices[i] = {u.x * half.x, u.y * half.y, u.z * half.z};
+    }
+    for (int f = 0; f < 6; ++f) offsets[f] = (&half.x)[f / 2];
+    HullView v = viewOf(c.hull, c.adjacency);
+    v.vertices = vertices;
+    v.offsets = offsets;
+    v.size = length(half);
+    return v;
+}
+
+/// Thread-local scratch (grown, never shrunk), so the kernels do not allocate in steady state.
+struct Scratch {
+    std::vector<Vec3> vertices, normals, edgeDir, edgeCross;
+    std::vector<float> offsets, faceSide;
+    HullAdjacency adjA, adjB;
+};
+Scratch& scratch() {
+    thread_local Scratch s;
+    return s;
+}
+
+/// Closest points of segments p1 + s d1 and p2 + t d2 (s, t in [0, 1]), Ericson 5.1.9.
+void closestSegmentPoints(Vec3 p1, Vec3 d1, Vec3 p2, Vec3 d2, float& s, float& t) {
+    const Vec3 r = p1 - p2;
+    const float a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
+    if (a <= 0 && e <= 0) {
+        s = t = 0;
+        return;
+    }
+    if (a <= 0) {
+        s = 0, t = clamp01(f / e);
+        return;
+    }
+    const float c = dot(d1, r);
+    if (e <= 0) {
+        t = 0, s = clamp01(-c / a);
+        return;
+    }
+    const float b = dot(d1, d2), denom = a * e - b * b;
+    s = denom > 0 ? clamp01((b * f - c * e) / denom) : 0.0f;
+    t = (b * s + f) / e;
+    if (t < 0) {
+        t = 0, s = clamp01(-c / a);
+    } else if (t > 1) {
+        t = 1, s = clamp01((b - c) / a);
+    }
+}
+
+/// Hull-hull kernel. B is brought into A's frame (relative to A's centre); all tests run there.
+bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView& B, const Transform& poseB,
+                      float margin, Manifold& out) {
+    out.pointCount = 0;
+    Scratch& sc = scratch();
+    const Quat qInv = conjugate(poseA.rotation);
+    const Rot r = toRot(qInv * poseB.rotation);
+    const Vec3 t = rotate(qInv, poseB.position - poseA.position);
+    if (sc.vertices.size() < static_cast<std::size_t>(B.vertexCount)) sc.vertices.resize(B.vertexCount);
+    if (sc.normals.size() < static_cast<std::size_t>(B.faceCount)) {
+        sc.normals.resize(B.faceCount);
+        sc.offsets.resize(B.faceCount);
+    }
+    if (sc.edgeDir.size() < static_cast<std::size_t>(B.edgeCount)) {
+        sc.edgeDir.resize(B.edgeCount);
+        sc.edgeCross.resize(B.edgeCount);
+    }
+    Vec3* vb = sc.vertices.data();
+    Vec3* nb = sc.normals.data();
+    float* ob = sc.offsets.data();
+    for (int i = 0; i < B.vertexCount; ++i) vb[i] = r * B.vertices[i] + t;
+    for (int f = 0; f < B.faceCount; ++f) {
+        nb[f] = r * B.normals[f];
+        ob[f] = B.offsets[f] + dot(nb[f], t);
+    }
+    const Vec3* va = A.vertices;
+
+    // Face axes of A: separation = lowest vertex of B above A's face plane.
+    float sepA = -INFINITY;
+    int faceA = 0;
+    for (int f = 0; f < A.faceCount; ++f) {
+        const Vec3 n = A.normals[f];
+        float lo = INFINITY;
+        for (int i = 0; i < B.vertexCount; ++i) lo = minf(lo, dot(n, vb[i]));
+        const float sep = lo - A.offsets[f];
+        if (sep > margin) return false;  // separated: the common exit, taken as soon as found
+        if (sep > sepA) sepA = sep, faceA = f;
+    }
+
+    // Face axes of B.
+    float sepB = -INFINITY;
+    int faceB = 0;
+    for (int f = 0; f < B.faceCount; ++f) {
+        const Vec3 n = nb[f];
+        float lo = INFINITY;
+        for (int i = 0; i < A.vertexCount; ++i) lo = minf(lo, dot(n, va[i]));
+        const float sep = lo - ob[f];
+        if (sep > margin) return false;
+        if (sep > sepB) sepB = sep, faceB = f;
+    }
+
+    const float absTol = kBoxAxisAbsoluteTolerance * maxf(A.size, B.size);
+    auto clearlyBetter = [&](float candidate, float current) {
+        return candidate > current + kBoxAxisRelativeTolerance * std::fabs(current) + absTol;
+    };
+    const bool useB = clearlyBetter(sepB, sepA);
+    const float sepFace = useB ? sepB : sepA;
+
+    // Edge pairs whose Gauss-map arcs cross (Gregorius' IsMinkowskiFace, with B's normals negated for the
+    // Minkowski difference A - B). Only a separation above `limit` matters: it separates or beats the face axis.
+    const float limit = minf(margin, sepFace + kBoxAxisRelativeTolerance * std::fabs(sepFace) + absTol);
+    for (int j = 0; j < B.edgeCount; ++j) {
+        const HullEdge& e = B.edges[j];
+        sc.edgeDir[j] = vb[e.v1] - vb[e.v0];
+        sc.edgeCross[j] = cross(nb[e.face1], nb[e.face0]);  // (-n1) x (-n0)
+    }
+    const Vec3* eDirB = sc.edgeDir.data();
+    const Vec3* eCrossB = sc.edgeCross.data();
+    if (sc.faceSide.size() < static_cast<std::size_t>(B.faceCount)) sc.faceSide.resize(B.faceCount);
+    float* faceSide = sc.faceSide.data();
+    constexpr float kParallel2 = kBoxEdgeParallelEpsilon * kBoxEdgeParallelEpsilon;
+    float sepE = -INFINITY;
+    int edgeA = -1, edgeB = -1;
+    Vec3 axisE{};
+    for (int i = 0; i < A.edgeCount; ++i) {
+        const HullEdge& ea = A.edges[i];
+        const Vec3 a = A.normals[ea.face0], b = A.normals[ea.face1];
+        const Vec3 bxa = cross(b, a);
+        const Vec3 pa = va[ea.v0], da = va[ea.v1] - pa;
+        const float da2 = dot(da, da);
+        const Vec3 paRel = pa - A.interior;
+        // Side of every B face normal against this edge's great circle, once per face rather than twice per edge.
+        for (int f = 0; f < B.faceCount; ++f) faceSide[f] = -dot(nb[f], bxa);
+        for (int j = 0; j < B.edgeCount; ++j) {
+            const HullEdge& eb = B.edges[j];
+            const float cba = faceSide[eb.face0], dba = faceSide[eb.face1];
+            if (cba * dba >= 0) continue;
+            const float adc = dot(a, eCrossB[j]), bdc = dot(b, eCrossB[j]);
+            if (adc * bdc >= 0 || cba * bdc <= 0) continue;
+            Vec3 axis = cross(da, eDirB[j]);
+            const float len2 = dot(axis, axis);
+            if (len2 < kParallel2 * da2 * dot(eDirB[j], eDirB[j])) continue;
+            if (dot(axis, paRel) < 0) axis = -axis;
+            const float num = dot(axis, vb[eb.v0] - pa);
+            // sep = num / |axis| > limit, tested without the square root first.
+            if (limit <= 0 ? num <= limit * std::sqrt(len2) : (num <= 0 || num * num <= limit * limit * len2)) continue;
+            const float sep = num / std::sqrt(len2);
+            if (sep > margin) return false;
+            if (sep > sepE) sepE = sep, edgeA = i, edgeB = j, axisE = axis / std::sqrt(len2);
+        }
+    }
+    if (sepE > margin) return false;
+
+    const Rot ra = toRot(poseA.rotation);
+    if (edgeA >= 0 && clearlyBetter(sepE, sepFace)) {
+        const HullEdge& ea = A.edges[edgeA];
+        const HullEdge& eb = B.edges[edgeB];
+        const Vec3 pa = va[ea.v0], da = va[ea.v1] - pa, pb = vb[eb.v0], db = eDirB[edgeB];
+        float s, w;
+        closestSegmentPoints(pa, da, pb, db, s, w);
+        const Vec3 ca = pa + da * s, cb = pb + db * w;
+        const float depth = dot(ca - cb, axisE);
+        if (depth < -margin) return false;
+        out.normal = ra * axisE;
+        out.points[0].position = poseA.position + ra * cb;
+        out.points[0].depth = depth;
+        out.points[0].feature = (2u << 30) | ((static_cast<std::uint32_t>(edgeA) & 0x7FFFu) << 15) |
+                                (static_cast<std::uint32_t>(edgeB) & 0x7FFFu);
+        out.pointCount = 1;
+        return true;
+    }
+
+    // Face contact. Reference face on A (or B). Incident face: among the other hull's faces through its deepest
+    // vertex along the reference normal, the most anti-parallel one. (The most anti-parallel face overall can lie
+    // beside the reference face for general hulls, and then clips to nothing.)
+    const HullView& R = useB ? B : A;
+    const HullView& I = useB ? A : B;
+    const Vec3* rv = useB ? vb : va;
+    const Vec3* iv = useB ? va : vb;
+    const int fr = useB ? faceB : faceA;
+    const Vec3 refN = useB ? nb[fr] : A.normals[fr];
+    const float refOff = useB ? ob[fr] : A.offsets[fr];
+    std::uint32_t deepest = 0;
+    float lowest = INFINITY;
+    for (int i = 0; i < I.vertexCount; ++i) {
+        const float h = dot(refN, iv[i]);
+        if (h < lowest) lowest = h, deepest = static_cast<std::uint32_t>(i);
+    }
+    int fi = 0;
+    float mostAnti = INFINITY;
+    for (int f = 0; f < I.faceCount; ++f) {
+        const float c = dot(useB ? A.normals[f] : nb[f], refN);
+        if (c >= mostAnti) continue;
+        for (std::uint32_t k = I.faceStart[f]; k < I.faceStart[f + 1]; ++k)
+            if (I.faceVertices[k] == deepest) {
+                mostAnti = c, fi = f;
+                break;
+            }
+    }
+    ClipVertex bufA[kClipCapacity], bufB[kClipCapacity];
+    ClipVertex* cur = bufA;
+    ClipVertex* nxt = bufB;
+    const std::uint32_t i0 = I.faceStart[fi], i1 = I.faceStart[fi + 1];
+    int n = 0;
+    for (std::uint32_t k = i0; k < i1 && n < kClipCapacity; ++k, ++n)
+        cur[n] = {iv[I.faceVertices[k]], static_cast<std::uint16_t>(n), static_cast<std::uint16_t>(n)};
+    const std::uint32_t r0 = R.faceStart[fr], r1 = R.faceStart[fr + 1];
+    for (std::uint32_t k = r0; k < r1 && n > 0; ++k) {
+        const Vec3 p0 = rv[R.faceVertices[k]], p1 = rv[R.faceVertices[k + 1 == r1 ? r0 : k + 1]];
+        const Vec3 side = cross(p1 - p0, refN);
+        n = clipPolygon(cur, n, nxt, side, dot(side, p0), static_cast<int>(k - r0));
+        ClipVertex* tmp = cur;
+        cur = nxt;
+        nxt = tmp;
+    }
+    Vec3 pts[kClipCapacity];
+    float depth[kClipCapacity];
+    std::uint16_t ids[kClipCapacity];
+    int m = 0;
+    for (int k = 0; k < n; ++k) {
+        const float d = refOff - dot(refN, cur[k].p);
+        if (d >= -margin) pts[m] = cur[k].p, depth[m] = d, ids[m] = cur[k].id, ++m;
+    }
+    if (m == 0) {
+        // Nothing of the incident face lies over the reference face (deep, lopsided overlaps where hysteresis kept
+        // a face axis): report the deepest incident vertex alone, so the pair is never dropped while the SAT says
+        // it overlaps.
+        const float d = refOff - lowest;
+        if (d < -margin) return false;
+        pts[0] = iv[deepest], depth[0] = d, m = 1;
+        ids[0] = 0x7FFF;
+        for (std::uint32_t k = I.faceStart[fi]; k < I.faceStart[fi + 1]; ++k)
+            if (I.faceVertices[k] == deepest) ids[0] = static_cast<std::uint16_t>(k - I.faceStart[fi]);
+    }
+    Vec3 u, v;
+    planeBasis(refN, u, v);
+    int chosen[4];
+    const int count = reduceContactPoints(pts, depth, m, u, v, chosen);
+    out.normal = ra * (useB ? -refN : refN);
+    const std::uint32_t base = ((useB ? 1u : 0u) << 30) | ((static_cast<std::uint32_t>(fr) & 0xFFu) << 22) |
+                               ((static_cast<std::uint32_t>(fi) & 0x3Fu) << 16);
+    for (int k = 0; k < count; ++k) {
+        const int c = chosen[k];
+        // With the reference face on B the clipped points lie on A's face: move them onto B's face.
+        const Vec3 p = useB ? pts[c] + refN * depth[c] : pts[c];
+        out.points[k].position = poseA.position + ra * p;
+        out.points[k].depth = depth[c];
+        out.points[k].feature = base | ids[c];
+    }
+    out.pointCount = count;
+    return count > 0;
+}
+
+/// Segment feature of parameter t in [0, 1]: 1 at the start, 2 at the end, 0 between.
+std::uint32_t segmentCode(float t) { return t <= 0 ? 1u : (t >= 1 ? 2u : 0u); }
+
+std::uint32_t nearestVertex(const HullView& H, Vec3 p) {
+    int best = 0;
+    float bestD = INFINITY;
+    for (int i = 0; i < H.vertexCount; ++i) {
+        const Vec3 d = H.vertices[i] - p;
+        const float d2 = dot(d, d);
+        if (d2 < bestD) bestD = d2, best = i;
+    }
+    return static_cast<std::uint32_t>(best);
+}
+
+/// Clips segment p0 + t (p1 - p0) to the prism over face f and reports its ends within the margin.
+int capsuleFaceContact(const HullView& H, int f, Vec3 p0, Vec3 p1, float radius, float margin, Vec3 out[2],
+                       float depth[2], std::uint32_t feature[2]) {
+    const Vec3 n = H.normals[f], d = p1 - p0;
+    float t0 = 0, t1 = 1;
+    int plane0 = -1, plane1 = -1;
+    const std::uint32_t s0 = H.faceStart[f], s1 = H.faceStart[f + 1];
+    for (std::uint32_t k = s0; k < s1; ++k) {
+        const Vec3 a = H.vertices[H.faceVertices[k]], b = H.vertices[H.faceVertices[k + 1 == s1 ? s0 : k + 1]];
+        const Vec3 side = cross(b - a, n);
+        const float h = dot(side, a);
+        const float e0 = dot(side, p0) - h, e1 = dot(side, p1) - h;
+        if (e0 > 0 && e1 > 0) return 0;
+        const int plane = static_cast<int>(k - s0);
+        if (e0 > 0) {
+            const float t = e0 / (e0 - e1);
+            if (t > t0) t0 = t, plane0 = plane;
+        } else if (e1 > 0) {
+            const float t = e0 / (e0 - e1);
+            if (t < t1) t1 = t, plane1 = plane;
+        }
+    }
+    if (t0 > t1) return 0;
+    const int ends = dot(d, d) > 0 ? 2 : 1;
+    int count = 0;
+    for (int e = 0; e < ends; ++e) {
+        const Vec3 q = p0 + d * (e == 0 ? t0 : t1);
+        const float gap = dot(n, q) - H.offsets[f];
+        if (radius - gap < -margin) continue;
+        const int plane = e == 0 ? plane0 : plane1;
+        out[count] = q - n * gap;
+        depth[count] = radius - gap;
+        feature[count] = (1u << 30) | ((static_cast<std::uint32_t>(f) & 0xFFu) << 8) | static_cast<std::uint32_t>(e) |
+                         (plane >= 0 ? 0x40u | ((static_cast<std::uint32_t>(plane) & 0x1Fu) << 1) : 0u);
+        ++count;
+    }
+    return count;
+}
+
+/// Exact distance between segment seg (swept by radius) and the box of half extents h, both in the box frame, as
+/// the best of all candidate separating axes of the two cores: the box faces, segment x box axes, box vertex to its
+/// closest segment point, and segment end to its closest box point. Those are the normals of every face, edge and
+/// vertex of the Minkowski difference, so when the cores are apart the best axis is the direction of the closest
+/// points and its separation is the distance. Same result layout as GJK (normal from the capsule to the box).
+GjkResult segmentBoxDistance(const Vec3 seg[2], float radius, Vec3 h, float margin) {
+    const Vec3 d = seg[1] - seg[0];
+    const float dd = dot(d, d);
+    const float eps = 1e-6f * (length(h) + std::sqrt(dd));
+    GjkResult r;
+    float best = -INFINITY;
+    Vec3 bestAxis{0, 1, 0}, bestSeg = seg[0];
+    int bestEdge = -1;  // a segment x box-axis winner finds its closest points after the search
+    auto consider = [&](Vec3 axis, Vec3 pSeg, int edge) {  // unit axis from the box to the segment
+        const float lo = minf(dot(axis, seg[0]), dot(axis, seg[1]));
+        const float sep = lo - (h.x * std::fabs(axis.x) + h.y * std::fabs(axis.y) + h.z * std::fabs(axis.z));
+        if (sep > best) best = sep, bestAxis = axis, bestSeg = pSeg, bestEdge = edge;
+    };
+    for (int k = 0; k < 3; ++k) {
+        Vec3 axis{};
+        (&axis.x)[k] = 1;
+        const bool firstLow = (&seg[0].x)[k] <= (&seg[1].x)[k];
+        consider(axis, seg[firstLow ? 0 : 1], -1);
+        consider(-axis, seg[firstLow ? 1 : 0], -1);
+    }
+    if (best - radius > margin) {  // a face axis already separates beyond the margin: the common early exit
+        r.status = GjkStatus::Separated;
+        r.distance = best - radius;
+        return r;
+    }
+    for (int k = 0; k < 3; ++k) {
+        Vec3 axis{};
+        (&axis.x)[k] = 1;
+        const Vec3 c = cross(d, axis);
+        const float len = length(c);
+        if (len > eps * std::sqrt(dd) && len > kBoxEdgeParallelEpsilon * std::sqrt(dd))
+            consider(dot(c, seg[0]) < 0 ? -c / len : c / len, seg[0], k);
+    }
+    for (int i = 0; i < 8; ++i) {
+        const Vec3 v{i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z};
+        const float t = dd > 0 ? clamp01(dot(v - seg[0], d) / dd) : 0.0f;
+        const Vec3 q = seg[0] + d * t, a = q - v;
+        const float len = length(a);
+        if (len > eps) consider(a / len, q, -1);
+    }
+    for (int e = 0; e < 2; ++e) {
+        const Vec3 p = seg[e];
+        const Vec3 q{maxf(-h.x, minf(p.x, h.x)), maxf(-h.y, minf(p.y, h.y)), maxf(-h.z, minf(p.z, h.z))};
+        const Vec3 a = p - q;
+        const float len = length(a);
+        if (len > eps) consider(a / len, p, -1);
+    }
+    if (best <= 1e-6f) return r;  // cores overlap (or touch): no exact distance from the axes
+    if (bestEdge >= 0) {
+        // Closest points of the segment and the box edge along axis k that supports the axis.
+        const int k = bestEdge;
+        const Vec3 n = bestAxis;
+        Vec3 corner{h.x * (n.x < 0 ? -1.0f : 1.0f), h.y * (n.y < 0 ? -1.0f : 1.0f), h.z * (n.z < 0 ? -1.0f : 1.0f)};
+        (&corner.x)[k] = -(&h.x)[k];
+        Vec3 edge{};
+        (&edge.x)[k] = 2 * (&h.x)[k];
+        float s, w;
+        closestSegmentPoints(seg[0], d, corner, edge, s, w);
+        bestSeg = seg[0] + d * s;
+    }
+    r.status = best > radius ? GjkStatus::Separated : GjkStatus::RadiiOverlap;
+    r.distance = best - radius;
+    r.normal = -bestAxis;
+    r.pointA = bestSeg - bestAxis * radius;
+    r.pointB = bestSeg - bestAxis * best;
+    return r;
+}
+
+/// Capsule A against polytope B, in B's frame relative to its centre. `boxHalf` is set when B is a box: its exact
+/// segment-box distance replaces GJK.
+bool collideCapsulePolytope(const CapsuleSegment& capsule, const HullView& H, const Transform& poseH, float margin,
+                            Manifold& out, const Vec3* boxHalf = nullptr) {
+    out.pointCount = 0;
+    const Quat qInv = conjugate(poseH.rotation);
+    const Vec3 c = rotate(qInv, capsule.center - poseH.position), h = rotate(qInv, capsule.halfAxis);
+    const Vec3 seg[2] = {c - h, c + h};
+    const float radius = capsule.radius;
+    const Rot rh = toRot(poseH.rotation);
+
+    GjkShape sa, sb;
+    sa.core = GjkShape::Core::Points, sa.points = seg, sa.pointCount = 2, sa.radius = radius;
+    sb.core = GjkShape::Core::Points, sb.points = H.vertices, sb.pointCount = static_cast<std::uint32_t>(H.vertexCount);
+    const GjkResult g = boxHalf ? segmentBoxDistance(seg, radius, *boxHalf, margin) : gjkDistance(sa, sb);
+
+    Vec3 pts[2];
+    float depth[2];
+    std::uint32_t feature[2];
+    int count = 0;
+    Vec3 normal;  // from the capsule to the polytope, in B's frame
+    if (g.status != GjkStatus::CoresOverlap) {
+        if (g.distance > margin) return false;
+        normal = g.normal;
+        int best = 0;
+        float bestCos = -INFINITY;
+        for (int f = 0; f < H.faceCount; ++f) {
+            const float cs = -dot(H.normals[f], normal);
+            if (cs > bestCos) bestCos = cs, best = f;
+        }
+        if (bestCos >= kCapsuleFaceAlignCos) {
+            // The points come from the face; the normal stays GJK's (the exact direction of least separation: the
+            // face normal, up to the alignment tolerance, would under-report how far a tilted capsule must move).
+            count = capsuleFaceContact(H, best, seg[0], seg[1], radius, margin, pts, depth, feature);
+            // Keep the face points only if they carry GJK's depth: when GJK's closest point is on the face's
+            // boundary and the capsule hangs over it, the clipped segment misses the deepest part.
+            const float tol = kBoxAxisAbsoluteTolerance * maxf(H.size, length(h) + radius);
+            if (count > 0 && maxf(depth[0], count > 1 ? depth[1] : -INFINITY) < -g.distance - tol) count = 0;
+        }
+        if (count == 0) {
+            const Vec3 d = seg[1] - seg[0];
+            const float dd = dot(d, d);
+            const float tSeg = dd > 0 ? dot(g.pointA - normal * radius - seg[0], d) / dd : 0.0f;
+            pts[0] = g.pointB, depth[0] = -g.distance;
+            feature[0] = (2u << 30) | ((nearestVertex(H, g.pointB) & 0xFFFFu) << 2) | segmentCode(tSeg);
+            count = 1;
+        }
+    } else {
+        // Cores overlap: SAT over the faces and the admissible segment x edge axes.
+        float sepF = -INFINITY;
+        int faceF = 0;
+        for (int f = 0; f < H.faceCount; ++f) {
+            const Vec3 n = H.normals[f];
+            const float sep = minf(dot(n, seg[0]), dot(n, seg[1])) - H.offsets[f] - radius;
+            if (sep > sepF) sepF = sep, faceF = f;
+        }
+        if (sepF > margin) return false;
+        const Vec3 d = seg[1] - seg[0];
+        const float dd = dot(d, d);
+        float sepE = -INFINITY;
+        int edgeE = -1;
+        Vec3 axisE{};
+        constexpr float kParallel2 = kBoxEdgeParallelEpsilon * kBoxEdgeParallelEpsilon;
+        for (int i = 0; i < H.edgeCount && dd > 0; ++i) {
+            const HullEdge& e = H.edges[i];
+            // The segment's Gauss map is the great circle orthogonal to d; the edge's arc must cross it.
+            if (dot(H.normals[e.face0], d) * dot(H.normals[e.face1], d) >= 0) continue;
+            const Vec3 v0 = H.vertices[e.v0], ed = H.vertices[e.v1] - v0;
+            Vec3 axis = cross(d, ed);
+            const float len2 = dot(axis, axis);
+            if (len2 < kParallel2 * dd * dot(ed, ed)) continue;
+            if (dot(axis, v0 - H.interior) < 0) axis = -axis;  // outward from the polytope
+            const float sep = dot(axis, seg[0] - v0) / std::sqrt(len2) - radius;
+            if (sep > sepE) sepE = sep, edgeE = i, axisE = axis / std::sqrt(len2);
+        }
+        if (sepE > margin) return false;
+        const float absTol = kBoxAxisAbsoluteTolerance * maxf(H.size, std::sqrt(dd));
+        if (edgeE >= 0 && sepE > sepF + kBoxAxisRelativeTolerance * std::fabs(sepF) + absTol) {
+            const HullEdge& e = H.edges[edgeE];
+            const Vec3 v0 = H.vertices[e.v0], ed = H.vertices[e.v1] - v0;
+            float s, w;
+            closestSegmentPoints(seg[0], d, v0, ed, s, w);
+            const Vec3 ca = seg[0] + d * s, cb = v0 + ed * w;
+            normal = -axisE;
+            pts[0] = cb, depth[0] = radius - dot(axisE, ca - cb);
+            const Vec3 dv0 = cb - v0, dv1 = cb - H.vertices[e.v1];
+            const std::uint32_t vtx = dot(dv0, dv0) <= dot(dv1, dv1) ? e.v0 : e.v1;
+            feature[0] = (2u << 30) | ((vtx & 0xFFFFu) << 2) | segmentCode(s);
+            count = 1;
+        } else {
+            normal = -H.normals[faceF];
+            count = capsuleFaceContact(H, faceF, seg[0], seg[1], radius, margin, pts, depth, feature);
+            if (count == 0) {
+                // The segment lies beside the face's prism (possible only for odd shapes): its deepest end.
+                const Vec3 n = H.normals[faceF];
+                const int e = dot(n, seg[0]) <= dot(n, seg[1]) ? 0 : 1;
+                const float gap = dot(n, seg[e]) - H.offsets[faceF];
+                pts[0] = seg[e] - n * gap, depth[0] = radius - gap;
+                feature[0] = (1u << 30) | ((static_cast<std::uint32_t>(faceF) & 0xFFu) << 8) | e;
+                count = 1;
+            }
+        }
+    }
+    out.normal = rh * normal;
+    for (int k = 0; k < count; ++k) {
+        out.points[k].position = poseH.position + rh * pts[k];
+        out.points[k].depth = depth[k];
+        out.points[k].feature = feature[k];
+    }
+    out.pointCount = count;
+    return count > 0;
+}
+
+}  // namespace
+
+HullAdjacency buildHullAdjacency(const ConvexHull& hull) {
+    HullAdjacency adj;
+    const std::size_t nv = hull.vertices.size();
+    // Directed face edges u -> v grouped by u (compressed rows): value v and the face that holds the edge.
+    std::vector<std::uint32_t> start(nv + 1, 0), to, face;
+    const std::uint32_t faces = hull.faceCount();
+    for (std::uint32_t f = 0; f < faces; ++f)
+        for (std::uint32_t k = hull.faceStart[f]; k < hull.faceStart[f + 1]; ++k) ++start[hull.faceVertices[k] + 1];
+    for (std::size_t i = 0; i < nv; ++i) start[i + 1] += start[i];
+    to.resize(start[nv]);
+    face.resize(start[nv]);
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::uint32_t f = 0; f < faces; ++f) {
+        const std::uint32_t s0 = hull.faceStart[f], s1 = hull.faceStart[f + 1];
+        for (std::uint32_t k = s0; k < s1; ++k) {
+            const std::uint32_t u = hull.faceVertices[k], v = hull.faceVertices[k + 1 == s1 ? s0 : k + 1];
+            to[fill[u]] = v;
+            face[fill[u]++] = f;
+        }
+    }
+    auto faceOf = [&](std::uint32_t u, std::uint32_t v) {
+        for (std::uint32_t k = start[u]; k < start[u + 1]; ++k)
+            if (to[k] == v) return face[k];
+        return 0u;  // not an edge of any face: only for malformed hulls
+    };
+    adj.edges.resize(hull.edges.size() / 2);
+    for (std::size_t e = 0; e < adj.edges.size(); ++e) {
+        const std::uint32_t u = hull.edges[2 * e], v = hull.edges[2 * e + 1];
+        adj.edges[e] = {u, v, faceOf(u, v), faceOf(v, u)};
+    }
+    Vec3 sum{};
+    for (const Vec3& p : hull.vertices) sum += p;
+    adj.interior = nv > 0 ? sum / static_cast<float>(nv) : Vec3{};
+    for (const Vec3& p : hull.vertices) adj.size = maxf(adj.size, length(p - adj.interior));
+    return adj;
+}
+
+bool collideHulls(const ConvexHull& a, const HullAdjacency& adjA, const Transform& poseA, const ConvexHull& b,
+                  const HullAdjacency& adjB, const Transform& poseB, float margin, Manifold& out) {
+    return collidePolytopes(viewOf(a, adjA), poseA, viewOf(b, adjB), poseB, margin, out);
+}
+
+bool collideHulls(const ConvexHull& a, const Transform& poseA, const ConvexHull& b, const Transform& poseB,
+                  float margin, Manifold& out) {
+    Scratch& sc = scratch();
+    sc.adjA = buildHullAdjacency(a);
+    sc.adjB = buildHullAdjacency(b);
+    return collideHulls(a, sc.adjA, poseA, b, sc.adjB, poseB, margin, out);
+}
+
+bool collideBoxHull(const Transform& box, Vec3 half, const ConvexHull& hull, const HullAdjacency& adj,
+                    const Transform& poseHull, float margin, Manifold& out) {
+    Vec3 vertices[8];
+    float offsets[6];
+    return collidePolytopes(boxView(half, vertices, offsets), box, viewOf(hull, adj), poseHull, margin, out);
+}
+
+bool collideBoxHull(const Transform& box, Vec3 half, const ConvexHull& hull, const Transform& poseHull, float margin,
+                    Manifold& out) {
+    Scratch& sc = scratch();
+    sc.adjB = buildHullAdjacency(hull);
+    return collideBoxHull(box, half, hull, sc.adjB, poseHull, margin, out);
+}
+
+bool collideCapsuleBox(const CapsuleSegment& capsule, const Transform& box, Vec3 half, float margin, Manifold& out) {
+    Vec3 vertices[8];
+    float offsets[6];
+    return collideCapsulePolytope(capsule, boxView(half, vertices, offsets), box, margin, out, &half);
+}
+
+bool collideCapsuleHull(const CapsuleSegment& capsule, const ConvexHull& hull, const HullAdjacency& adj,
+                        const Transform& poseHull, float margin, Manifold& out) {
+    return collideCapsulePolytope(capsule, viewOf(hull, adj), poseHull, margin, out);
+}
+
+bool collideCapsuleHull(const CapsuleSegment& capsule, const ConvexHull& hull, const Transform& poseHull, float margin,
+                        Manifold& out) {
+    Scratch& sc = scratch();
+    sc.adjB = buildHullAdjacency(hull);
+    return collideCapsuleHull(capsule, hull, sc.adjB, poseHull, margin, out);
+}
+
+}  // namespace rubble::detail
