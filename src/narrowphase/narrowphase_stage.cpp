@@ -5,6 +5,7 @@
 #include "broadphase/static_bvh.h"
 #include "narrowphase/box_box.h"
 #include "narrowphase/convex_pairs.h"
+#include "narrowphase/hull_pairs.h"
 #include "narrowphase/triangle_pairs.h"
 #include "parallel.h"
 #include "shapes/mesh_adjacency.h"
@@ -59,8 +60,19 @@ void triangleOf(const Posed& mesh, std::uint32_t t, TriangleVertices& vertices, 
     }
 }
 
+/// The capsule-box kernel sees the capsule as A; the stage's order has the box first. Same contact seen from the
+/// other body: the normal turns round and the points move across the overlap onto the capsule.
+void collideBoxCapsule(const Posed& box, const Posed& capsule, float margin, Manifold& out) {
+    collideCapsuleBox(segmentOf(capsule), box.pose, box.shape->halfExtents, margin, out);
+    for (int p = 0; p < out.pointCount; ++p) out.points[p].position += out.normal * out.points[p].depth;
+    out.normal = -out.normal;
+}
+
 /// One pair through its scalar kernel; for triangle kernels B is the mesh and `triangle` picks the triangle.
-void collide(PairKernel kernel, const Posed& a, const Posed& b, std::uint32_t triangle, float margin, Manifold& out) {
+template <class HullMap>
+void collide(PairKernel kernel, const Posed& a, const Posed& b, std::uint32_t triangle, float margin,
+             const HullMap& hulls, Manifold& out) {
+    auto adjacency = [&](const Posed& p) -> const HullAdjacency& { return *hulls.at(p.shape->hull.get()).adjacency; };
     out.pointCount = 0;
     TriangleVertices tri;
     std::uint8_t active = 0;
@@ -83,6 +95,23 @@ void collide(PairKernel kernel, const Posed& a, const Posed& b, std::uint32_t tr
         case PairKernel::CapsuleCapsule:
             collideCapsules(segmentOf(a), segmentOf(b), margin, out);
             break;
+        case PairKernel::SphereHull:
+            // A sphere is a capsule whose segment has no length.
+            collideCapsuleHull({a.pose.position, {}, a.shape->radius}, *b.shape->hull, adjacency(b), b.pose, margin,
+                               out);
+            break;
+        case PairKernel::BoxCapsule:
+            collideBoxCapsule(a, b, margin, out);
+            break;
+        case PairKernel::BoxHull:
+            collideBoxHull(a.pose, a.shape->halfExtents, *b.shape->hull, adjacency(b), b.pose, margin, out);
+            break;
+        case PairKernel::CapsuleHull:
+            collideCapsuleHull(segmentOf(a), *b.shape->hull, adjacency(b), b.pose, margin, out);
+            break;
+        case PairKernel::HullHull:
+            collideHulls(*a.shape->hull, adjacency(a), a.pose, *b.shape->hull, adjacency(b), b.pose, margin, out);
+            break;
         case PairKernel::SphereTriangle:
             collideSphereTriangle(a.pose.position, a.shape->radius, tri, active, margin, out);
             break;
@@ -100,6 +129,9 @@ void collide(PairKernel kernel, const Posed& a, const Posed& b, std::uint32_t tr
 
 }  // namespace
 
+NarrowPhaseStage::NarrowPhaseStage() = default;
+NarrowPhaseStage::~NarrowPhaseStage() = default;
+
 PairKernel pairKernel(ShapeKind lower, ShapeKind upper) {
     using K = ShapeKind;
     if (lower == K::Sphere) {
@@ -107,8 +139,13 @@ PairKernel pairKernel(ShapeKind lower, ShapeKind upper) {
         if (upper == K::Box) return PairKernel::SphereBox;
         if (upper == K::Capsule) return PairKernel::SphereCapsule;
     }
+    if (lower == K::Sphere && upper == K::ConvexHull) return PairKernel::SphereHull;
     if (lower == K::Box && upper == K::Box) return PairKernel::BoxBox;
+    if (lower == K::Box && upper == K::Capsule) return PairKernel::BoxCapsule;
+    if (lower == K::Box && upper == K::ConvexHull) return PairKernel::BoxHull;
     if (lower == K::Capsule && upper == K::Capsule) return PairKernel::CapsuleCapsule;
+    if (lower == K::Capsule && upper == K::ConvexHull) return PairKernel::CapsuleHull;
+    if (lower == K::ConvexHull && upper == K::ConvexHull) return PairKernel::HullHull;
     if (upper == K::TriangleMesh || upper == K::Heightfield) {
         if (lower == K::Sphere) return PairKernel::SphereTriangle;
         if (lower == K::Capsule) return PairKernel::CapsuleTriangle;
@@ -154,6 +191,19 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
         for (std::uint32_t k = 0; k < p.triangleCount; ++k)
             addJob(p.moving, false, p.staticBody, true, candidates.meshTriangles[p.firstTriangle + k]);
 
+    // Hull adjacency for every hull a job will meet, built here so the parallel part only reads the map.
+    for (const Job& job : jobs_) {
+        if (job.kernel == PairKernel::Unsupported) continue;
+        for (bool sideB : {false, true}) {
+            const Posed p = posedSide(storage, shapes, job.pair, sideB);
+            if (p.shape->kind != ShapeKind::ConvexHull) continue;
+            HullEntry& entry = hullAdjacency_[p.shape->hull.get()];
+            if (!entry.adjacency) {
+                entry.hull = p.shape->hull;
+                entry.adjacency = std::make_unique<HullAdjacency>(buildHullAdjacency(*p.shape->hull));
+            }
+        }
+    }
     for (auto& bucket : bucket_) bucket.clear();
     for (std::uint32_t j = 0; j < jobs_.size(); ++j) bucket_[static_cast<int>(jobs_[j].kernel)].push_back(j);
     out.unsupportedPairs = static_cast<std::uint32_t>(bucket_[static_cast<int>(PairKernel::Unsupported)].size());
@@ -202,7 +252,8 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             for (std::size_t k = begin; k < end; ++k) {
                 const Job& job = jobs_[bucket[k]];
                 collide(job.kernel, posedSide(storage, shapes, job.pair, false),
-                        posedSide(storage, shapes, job.pair, true), job.pair.triangle, margin, perJob_[bucket[k]]);
+                        posedSide(storage, shapes, job.pair, true), job.pair.triangle, margin, hullAdjacency_,
+                        perJob_[bucket[k]]);
             }
         });
     }

@@ -3,6 +3,8 @@
 // shape-kind pair; each bucket runs one kernel over its pairs in parallel chunks (sphere-sphere in SIMD lanes),
 // and the manifolds come out in the candidates' canonical order whatever the thread count.
 #include <cstdint>
+#include <memory>
+#include <unordered_map>
 #include <vector>
 
 #include "body_storage.h"
@@ -13,6 +15,7 @@
 namespace rubble::detail {
 
 class TaskPool;
+struct HullAdjacency;
 
 inline constexpr std::uint16_t kNoChild = 0xFFFF;
 
@@ -35,7 +38,7 @@ struct Contacts {
     std::vector<ContactPair> pairs;
     std::vector<Manifold> manifolds;
     std::uint32_t pointCount = 0;
-    /// Candidate pairs (or compound child pairs) whose shape kinds have no kernel yet (hulls, capsule-box). They are
+    /// Candidate pairs (or compound child pairs) whose shape kinds have no kernel yet (hull-triangle). They are
     /// counted here and shown by the runner, never silently treated as apart.
     std::uint32_t unsupportedPairs = 0;
 
@@ -54,6 +57,11 @@ enum class PairKernel : std::uint8_t {
     SphereCapsule,
     BoxBox,
     CapsuleCapsule,
+    SphereHull,
+    BoxCapsule,
+    BoxHull,
+    CapsuleHull,
+    HullHull,
     SphereTriangle,
     CapsuleTriangle,
     BoxTriangle,
@@ -70,12 +78,22 @@ public:
     void run(const CandidatePairs& candidates, const BodyStorage& storage, const std::vector<Shape>& shapes,
              float margin, TaskPool& pool, Contacts& out);
 
+    NarrowPhaseStage();
+    ~NarrowPhaseStage();
+
 private:
     struct Job {
         ContactPair pair;
         PairKernel kernel = PairKernel::Unsupported;
     };
     std::vector<Job> jobs_;
+    /// Edge-face adjacency of every hull met so far (Gauss-map pruning needs it), built before the parallel work.
+    /// Each entry keeps its hull alive, so a hull's address cannot be reused by another while it is a key.
+    struct HullEntry {
+        std::shared_ptr<const ConvexHull> hull;
+        std::unique_ptr<HullAdjacency> adjacency;
+    };
+    std::unordered_map<const ConvexHull*, HullEntry> hullAdjacency_;
     std::vector<Manifold> perJob_;
     std::vector<std::uint32_t> bucket_[static_cast<int>(PairKernel::Count)];
     // SoA scratch for the batched sphere-sphere kernel.
