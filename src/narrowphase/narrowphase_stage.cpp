@@ -60,6 +60,23 @@ void triangleOf(const Posed& mesh, std::uint32_t t, TriangleVertices& vertices, 
     }
 }
 
+/// Centre of a sphere side. A whole moving sphere's centre is its centre of mass, so only the position rows are
+/// read: the common case (S4) then touches 3 arrays per side instead of every pose array.
+Vec3 sphereCenter(const BodyStorage& storage, const std::vector<Shape>& shapes, const ContactPair& p, bool sideB) {
+    const std::uint32_t i = sideB ? p.b : p.a;
+    if (!(sideB ? p.bStatic : p.aStatic) && (sideB ? p.childB : p.childA) == kNoChild)
+        return {storage.moving.px[i], storage.moving.py[i], storage.moving.pz[i]};
+    return posedSide(storage, shapes, p, sideB).pose.position;
+}
+
+float sphereRadius(const BodyStorage& storage, const std::vector<Shape>& shapes, const ContactPair& p, bool sideB) {
+    const std::uint32_t i = sideB ? p.b : p.a;
+    const bool isStatic = sideB ? p.bStatic : p.aStatic;
+    const std::uint16_t child = sideB ? p.childB : p.childA;
+    const Shape& shape = shapeOf(storage, shapes, i, isStatic);
+    return child == kNoChild ? shape.radius : shape.children[child].shape->radius;
+}
+
 /// The capsule-box kernel sees the capsule as A; the stage's order has the box first. Same contact seen from the
 /// other body: the normal turns round and the points move across the overlap onto the capsule.
 void collideBoxCapsule(const Posed& box, const Posed& capsule, float margin, Manifold& out) {
@@ -193,7 +210,10 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
 
     // Hull adjacency for every hull a job will meet, built here so the parallel part only reads the map.
     for (const Job& job : jobs_) {
-        if (job.kernel == PairKernel::Unsupported) continue;
+        const PairKernel k = job.kernel;
+        if (k != PairKernel::SphereHull && k != PairKernel::BoxHull && k != PairKernel::CapsuleHull &&
+            k != PairKernel::HullHull)
+            continue;
         for (bool sideB : {false, true}) {
             const Posed p = posedSide(storage, shapes, job.pair, sideB);
             if (p.shape->kind != ShapeKind::ConvexHull) continue;
@@ -220,11 +240,11 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
         pool.forChunks(n, kChunk * 4, [&](std::size_t, std::size_t begin, std::size_t end, int) {
             for (std::size_t k = begin; k < end; ++k) {
                 const ContactPair& p = jobs_[spheres[k]].pair;
-                const Posed a = posedSide(storage, shapes, p, false), b = posedSide(storage, shapes, p, true);
-                sphereIn_[0][k] = a.pose.position.x, sphereIn_[1][k] = a.pose.position.y;
-                sphereIn_[2][k] = a.pose.position.z, sphereIn_[3][k] = a.shape->radius;
-                sphereIn_[4][k] = b.pose.position.x, sphereIn_[5][k] = b.pose.position.y;
-                sphereIn_[6][k] = b.pose.position.z, sphereIn_[7][k] = b.shape->radius;
+                const Vec3 a = sphereCenter(storage, shapes, p, false), b = sphereCenter(storage, shapes, p, true);
+                sphereIn_[0][k] = a.x, sphereIn_[1][k] = a.y, sphereIn_[2][k] = a.z;
+                sphereIn_[3][k] = sphereRadius(storage, shapes, p, false);
+                sphereIn_[4][k] = b.x, sphereIn_[5][k] = b.y, sphereIn_[6][k] = b.z;
+                sphereIn_[7][k] = sphereRadius(storage, shapes, p, true);
             }
             const SpherePairs in{sphereIn_[0].data() + begin, sphereIn_[1].data() + begin, sphereIn_[2].data() + begin,
                                  sphereIn_[3].data() + begin, sphereIn_[4].data() + begin, sphereIn_[5].data() + begin,
