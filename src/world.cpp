@@ -10,6 +10,7 @@
 #include "body_storage.h"
 #include "bounds.h"
 #include "broadphase/broadphase_stage.h"
+#include "contacts.h"
 #include "effects.h"
 #include "integrate.h"
 #include "narrowphase/narrowphase_stage.h"
@@ -134,6 +135,8 @@ struct World::Impl {
     detail::CandidatePairs pairs;
     detail::NarrowPhaseStage narrowPhase;
     detail::Contacts contacts;
+    detail::ContactCache contactCache;
+    std::vector<detail::PointImpulse> impulses;
     std::vector<std::uint32_t> nonFinite;
     std::vector<BodyId> frozenReports;
 
@@ -703,6 +706,14 @@ void World::step(float dt) {
             profile.manifolds = static_cast<std::uint32_t>(w.contacts.manifolds.size());
             profile.contactPoints = w.contacts.pointCount;
             profile.unsupportedPairs = w.contacts.unsupportedPairs;
+            {
+                detail::StageTimer timer(profile, Stage::ContactCache, w.origin);
+                w.contactCache.warmStart(w.contacts, w.bodies, *w.pool, w.impulses);
+                // The solver will sit between these two: it starts from the carried impulses and leaves its own.
+                w.contactCache.remember(w.contacts, w.impulses, *w.pool);
+            }
+            profile.matchedManifolds = w.contactCache.matchedManifolds();
+            profile.warmStartedPoints = w.contactCache.matchedPoints();
         }
         {
             detail::StageTimer timer(profile, Stage::IntegratePositions, w.origin);

@@ -217,6 +217,8 @@ int run(const Options& options) {
         if (last.unsupportedPairs > 0)
             std::printf("; %u pairs skipped: their shape kinds have no kernel yet", last.unsupportedPairs);
         std::printf("\n");
+        std::printf("cache      %u of %u manifolds continue last step's, %u of %u points warm-started\n",
+                    last.matchedManifolds, last.manifolds, last.warmStartedPoints, last.contactPoints);
         std::printf(
             "note       the solver is not built yet: contacts are found, but bodies still pass through each\n"
             "           other, the ground and the terrain; the figures below show it.\n");

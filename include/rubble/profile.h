@@ -13,6 +13,7 @@ enum class Stage : std::uint8_t {
     UpdateBounds,
     BroadPhase,
     NarrowPhase,
+    ContactCache,
     IntegratePositions,
     Count,
 };
@@ -44,7 +45,9 @@ struct Profile {
     std::uint32_t meshTriangles = 0;  ///< triangles handed over with the mesh pairs
     std::uint32_t manifolds = 0;      ///< contact manifolds (touching or speculative pairs)
     std::uint32_t contactPoints = 0;
-    std::uint32_t unsupportedPairs = 0;  ///< candidate pairs whose shape kinds have no narrow-phase kernel yet
+    std::uint32_t unsupportedPairs = 0;   ///< candidate pairs whose shape kinds have no narrow-phase kernel yet
+    std::uint32_t matchedManifolds = 0;   ///< manifolds that continue one of the previous step (same pair and parts)
+    std::uint32_t warmStartedPoints = 0;  ///< points whose feature matched: they start from last step's impulses
 
     const StageTiming& operator[](Stage s) const { return stages[static_cast<int>(s)]; }
     StageTiming& operator[](Stage s) { return stages[static_cast<int>(s)]; }

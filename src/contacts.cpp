@@ -1,0 +1,104 @@
+#include "contacts.h"
+
+#include <atomic>
+
+#include "parallel.h"
+
+namespace rubble::detail {
+namespace {
+
+constexpr std::size_t kChunk = 1024;
+
+std::uint64_t hashOf(const ContactKey& k) {
+    // Three words folded with odd multipliers and a final avalanche: keys differ in few bits (neighbouring slots).
+    std::uint64_t h = k.slots * 0x9E3779B97F4A7C15ull;
+    h ^= (k.generations + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full;
+    h ^= (k.parts + 0x165667B19E3779F9ull) * 0xD6E8FEB86659FD93ull;
+    h ^= h >> 32;
+    h *= 0xD6E8FEB86659FD93ull;
+    return h ^ (h >> 29);
+}
+
+std::uint32_t slotOf(const BodyStorage& s, std::uint32_t dense, bool isStatic) {
+    return isStatic ? s.statics.slot[dense] : s.moving.slot[dense];
+}
+
+}  // namespace
+
+void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storage, TaskPool& pool,
+                             std::vector<PointImpulse>& impulses) {
+    const std::size_t n = contacts.manifolds.size();
+    currentKeys_.resize(n);
+    impulses.resize(n * kMaxManifoldPoints);
+    const std::size_t mask = table_.empty() ? 0 : table_.size() - 1;
+    std::vector<std::uint32_t> chunkManifolds(TaskPool::chunkCount(n, kChunk)), chunkPoints(chunkManifolds.size());
+    const auto& slots = storage.slots();
+    pool.forChunks(n, kChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
+        std::uint32_t manifolds = 0, points = 0;
+        std::fill(impulses.begin() + begin * kMaxManifoldPoints, impulses.begin() + end * kMaxManifoldPoints,
+                  PointImpulse{});
+        for (std::size_t m = begin; m < end; ++m) {
+            const ContactPair& p = contacts.pairs[m];
+            const std::uint32_t slotA = slotOf(storage, p.a, p.aStatic), slotB = slotOf(storage, p.b, p.bStatic);
+            ContactKey key;
+            key.slots = (std::uint64_t{slotA} << 32) | slotB;
+            key.generations = (std::uint64_t{slots[slotA].generation} << 32) | slots[slotB].generation;
+            key.parts = (std::uint64_t{p.triangle} << 32) | (std::uint64_t{p.childA} << 16) | p.childB;
+            currentKeys_[m] = key;
+            if (table_.empty()) continue;
+            // Linear probing in a table at most half full: a miss ends at the first empty cell.
+            for (std::size_t at = hashOf(key) & mask;; at = (at + 1) & mask) {
+                const std::uint32_t entry = table_[at];
+                if (entry == 0) break;
+                const Entry& old = previous_[entry - 1];
+                if (!(old.key == key)) continue;
+                ++manifolds;
+                const Manifold& now = contacts.manifolds[m];
+                for (int i = 0; i < now.pointCount; ++i)
+                    for (int j = 0; j < old.pointCount; ++j)
+                        if (now.points[i].feature == old.features[j]) {
+                            impulses[m * kMaxManifoldPoints + i] = old.impulses[j];
+                            ++points;
+                            break;
+                        }
+                break;
+            }
+        }
+        chunkManifolds[chunk] = manifolds;
+        chunkPoints[chunk] = points;
+    });
+    matchedManifolds_ = matchedPoints_ = 0;
+    for (std::size_t c = 0; c < chunkManifolds.size(); ++c)
+        matchedManifolds_ += chunkManifolds[c], matchedPoints_ += chunkPoints[c];
+}
+
+void ContactCache::remember(const Contacts& contacts, const std::vector<PointImpulse>& impulses, TaskPool& pool) {
+    const std::size_t n = contacts.manifolds.size();
+    previous_.resize(n);
+    std::size_t size = 16;
+    while (size < 2 * n) size *= 2;
+    table_.assign(size, 0);
+    const std::size_t mask = size - 1;
+    pool.forChunks(n, kChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t m = begin; m < end; ++m) {
+            Entry& e = previous_[m];
+            e.key = currentKeys_[m];
+            e.pointCount = contacts.manifolds[m].pointCount;
+            for (int i = 0; i < e.pointCount; ++i) {
+                e.features[i] = contacts.manifolds[m].points[i].feature;
+                e.impulses[i] = impulses[m * kMaxManifoldPoints + i];
+            }
+            // Claim the first free cell of the probe sequence. Which cell a key ends up in may depend on the
+            // threads' timing, but every key is in the table exactly once, so every lookup finds the same entry.
+            for (std::size_t at = hashOf(e.key) & mask;; at = (at + 1) & mask) {
+                std::uint32_t expected = 0;
+                if (std::atomic_ref<std::uint32_t>(table_[at])
+                        .compare_exchange_strong(expected, static_cast<std::uint32_t>(m + 1),
+                                                 std::memory_order_relaxed))
+                    break;
+            }
+        }
+    });
+}
+
+}  // namespace rubble::detail

@@ -1,0 +1,124 @@
+// Contact cache: manifolds and points are matched across steps by stable keys and feature ids, impulses carry over
+// exactly, separated pairs are forgotten, and a body that reuses a slot inherits nothing.
+#include <gtest/gtest.h>
+
+#include "contacts.h"
+#include "parallel.h"
+
+using namespace rubble;
+using namespace rubble::detail;
+
+namespace {
+
+Manifold manifoldWith(std::initializer_list<std::uint32_t> features) {
+    Manifold m;
+    m.normal = {0, -1, 0};
+    for (std::uint32_t f : features) m.points[m.pointCount++] = {{0, 0, 0}, 0.01f, f};
+    return m;
+}
+
+struct Fixture {
+    BodyStorage storage;
+    TaskPool pool{2};
+    std::vector<BodyId> ids;
+
+    Fixture() {
+        for (int i = 0; i < 6; ++i) {
+            std::uint32_t dense;
+            ids.push_back(storage.allocate(BodySet::Moving, dense));
+        }
+    }
+    std::uint32_t dense(int body) const { return storage.find(ids[body])->dense; }
+};
+
+}  // namespace
+
+TEST(ContactCache, CarriesImpulsesOfMatchingPointsAndForgetsTheRest) {
+    Fixture f;
+    ContactCache cache;
+    Contacts step1;
+    step1.pairs = {{f.dense(0), f.dense(1)}, {f.dense(2), f.dense(3)}};
+    step1.manifolds = {manifoldWith({10, 11, 12, 13}), manifoldWith({7})};
+    std::vector<PointImpulse> impulses;
+    cache.warmStart(step1, f.storage, f.pool, impulses);
+    EXPECT_EQ(cache.matchedManifolds(), 0u);  // nothing to match on the first step
+    ASSERT_EQ(impulses.size(), 2u * kMaxManifoldPoints);
+    for (int i = 0; i < 4; ++i) impulses[i] = {1.0f + i, 0.5f, -0.25f};  // what a solver would have accumulated
+    impulses[kMaxManifoldPoints] = {9, 9, 9};
+    cache.remember(step1, impulses, f.pool);
+
+    // Step 2: the first pair keeps three of its features (one new, in another order); the second pair separated.
+    Contacts step2;
+    step2.pairs = {{f.dense(0), f.dense(1)}, {f.dense(4), f.dense(5)}};
+    step2.manifolds = {manifoldWith({13, 99, 10, 11}), manifoldWith({7})};
+    cache.warmStart(step2, f.storage, f.pool, impulses);
+    EXPECT_EQ(cache.matchedManifolds(), 1u);
+    EXPECT_EQ(cache.matchedPoints(), 3u);
+    EXPECT_EQ(impulses[0].normal, 4.0f);  // feature 13 was the fourth point
+    EXPECT_EQ(impulses[1].normal, 0.0f);  // feature 99 is new
+    EXPECT_EQ(impulses[2].normal, 1.0f);
+    EXPECT_EQ(impulses[3].normal, 2.0f);
+    EXPECT_EQ(impulses[3].tangent2, -0.25f);
+    EXPECT_EQ(impulses[kMaxManifoldPoints].normal, 0.0f) << "a different pair with the same feature id";
+    cache.remember(step2, impulses, f.pool);
+
+    // Step 3: the pair (2, 3) comes back, but it was forgotten when it separated.
+    Contacts step3;
+    step3.pairs = {{f.dense(2), f.dense(3)}};
+    step3.manifolds = {manifoldWith({7})};
+    cache.warmStart(step3, f.storage, f.pool, impulses);
+    EXPECT_EQ(cache.matchedManifolds(), 0u);
+}
+
+TEST(ContactCache, ABodyReusingASlotInheritsNothingAndRemovalsKeepOthersMatched) {
+    Fixture f;
+    ContactCache cache;
+    Contacts before;
+    before.pairs = {{f.dense(0), f.dense(1)}, {f.dense(4), f.dense(5)}};
+    before.manifolds = {manifoldWith({1}), manifoldWith({2})};
+    std::vector<PointImpulse> impulses;
+    cache.warmStart(before, f.storage, f.pool, impulses);
+    impulses[0].normal = impulses[kMaxManifoldPoints].normal = 5;
+    cache.remember(before, impulses, f.pool);
+
+    // Body 1 goes; a new body takes its slot (a new generation). Removal swaps the last body into body 1's row,
+    // so bodies 4 and 5 may change dense index: their manifold must still match through their slots.
+    f.storage.release(f.ids[1]);
+    std::uint32_t dense;
+    f.ids[1] = f.storage.allocate(BodySet::Moving, dense);
+    Contacts after;
+    after.pairs = {{f.dense(0), f.dense(1)}, {f.dense(4), f.dense(5)}};
+    after.manifolds = {manifoldWith({1}), manifoldWith({2})};
+    cache.warmStart(after, f.storage, f.pool, impulses);
+    EXPECT_EQ(impulses[0].normal, 0.0f) << "the new body in the old slot must start cold";
+    EXPECT_EQ(impulses[kMaxManifoldPoints].normal, 5.0f);
+    EXPECT_EQ(cache.matchedManifolds(), 1u);
+}
+
+TEST(ContactCache, StaticSidesAndThreadCountsAgree) {
+    // Many manifolds against a static body, matched on 1 and on 2 threads: the same impulses come back.
+    auto run = [](int threads) {
+        BodyStorage storage;
+        std::uint32_t dense;
+        storage.allocate(BodySet::Static, dense);
+        for (int i = 0; i < 5000; ++i) storage.allocate(BodySet::Moving, dense);
+        TaskPool pool(threads);
+        Contacts contacts;
+        for (std::uint32_t i = 0; i < 5000; ++i) {
+            contacts.pairs.push_back({i, 0, false, true, i % 7});
+            contacts.manifolds.push_back(manifoldWith({i % 3, 100 + i % 5}));
+        }
+        ContactCache cache;
+        std::vector<PointImpulse> impulses;
+        cache.warmStart(contacts, storage, pool, impulses);
+        for (std::size_t k = 0; k < impulses.size(); ++k) impulses[k].normal = float(k);
+        cache.remember(contacts, impulses, pool);
+        cache.warmStart(contacts, storage, pool, impulses);
+        EXPECT_EQ(cache.matchedPoints(), 10000u);
+        return impulses;
+    };
+    const auto one = run(1), two = run(2);
+    ASSERT_EQ(one.size(), two.size());
+    for (std::size_t k = 0; k < one.size(); ++k) ASSERT_EQ(one[k].normal, two[k].normal);
+    EXPECT_EQ(one[4 * 17 + 1].normal, float(4 * 17 + 1));
+}
