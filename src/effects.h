@@ -16,7 +16,9 @@ namespace rubble::detail {
 /// - friction / restitution: need a body with a non-zero coefficient;
 /// - joints: need a joint (none exist until the joint stage does);
 /// - sleeping and continuous collision are choices, kept as declared.
+/// `anyDamping` reports, from the same pass over the bodies, whether a moving body has damping (which makes the
+/// velocity stage necessary even without gravity, forces or rotation).
 EffectSet resolveEffects(EffectSet declared, const WorldSettings& settings, const MovingBodies& moving,
-                         const StaticBodies& statics, const std::vector<Shape>& shapes);
+                         const StaticBodies& statics, const std::vector<Shape>& shapes, bool& anyDamping);
 
 }  // namespace rubble::detail

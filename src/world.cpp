@@ -247,10 +247,7 @@ struct World::Impl {
 
     void resolveEffectsIfDirty() {
         if (!effectsDirty) return;
-        effects = detail::resolveEffects(settings.effects, settings, bodies.moving, bodies.statics, shapes);
-        anyDamping = false;
-        for (std::uint32_t i = 0, n = bodies.moving.size(); i < n; ++i)
-            anyDamping |= bodies.moving.linearDamping[i] != 0 || bodies.moving.angularDamping[i] != 0;
+        effects = detail::resolveEffects(settings.effects, settings, bodies.moving, bodies.statics, shapes, anyDamping);
         effectsDirty = false;
     }
 };

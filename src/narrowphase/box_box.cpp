@@ -120,7 +120,9 @@ int clipFace(const float r[3][3], const float t[3], const float hr[3], const flo
         count = m;
     } else {
         // Reduction (as in Gregorius' contact reduction): the deepest point, the point farthest from it, then the
-        // points that add the most area, measured in the reference plane (coordinates ku, kv).
+        // points that add the most area, measured in the reference plane (coordinates ku, kv). This is the same
+        // rule as reduceContactPoints in clip.cpp, specialised to the box frame: calling the shared function
+        // (copying points out and projecting them) made box-box 9% slower (9.3 -> 8.5 M manifolds/s, mixed poses).
         auto pu = [&](int k) { return bufA[keep[k]].p[ku]; };
         auto pv = [&](int k) { return bufA[keep[k]].p[kv]; };
         int i0 = 0;

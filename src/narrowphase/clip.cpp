@@ -30,8 +30,12 @@ int reduceContactPoints(const Vec3* points, const float* depth, int count, Vec3 
         for (int k = 0; k < count; ++k) chosen[k] = k;
         return count;
     }
-    auto pu = [&](int k) { return dot(points[k], u); };
-    auto pv = [&](int k) { return dot(points[k], v); };
+    // Each point projected once: the selection below reads these coordinates many times.
+    float coordU[kClipCapacity], coordV[kClipCapacity];
+    count = count < kClipCapacity ? count : kClipCapacity;
+    for (int k = 0; k < count; ++k) coordU[k] = dot(points[k], u), coordV[k] = dot(points[k], v);
+    auto pu = [&](int k) { return coordU[k]; };
+    auto pv = [&](int k) { return coordV[k]; };
     // Deepest point first: it carries the most important constraint.
     int i0 = 0;
     for (int k = 1; k < count; ++k) i0 = depth[k] > depth[i0] ? k : i0;

@@ -13,10 +13,6 @@
 
 #include "broadphase/sweep_and_prune.h"
 #include "parallel.h"
-// broadphase_scenarios.h names the stage types without their namespace; until it qualifies them, make them visible.
-namespace rubble::test {
-using namespace rubble::detail;
-}
 #include "support/broadphase_scenarios.h"
 
 namespace {
