@@ -1,32 +1,15 @@
 // The world: input validation at the API boundary, body and shape storage, and the step, which reads as the table
 // of contents of the engine (DESIGN.md, "One step").
-#include "rubble/world.h"
-
 #include <cmath>
 #include <cstring>
 #include <sstream>
 #include <string>
 
-#include "body_storage.h"
-#include "bounds.h"
-#include "broadphase/broadphase_stage.h"
-#include "contacts.h"
-#include "effects.h"
-#include "integrate.h"
-#include "narrowphase/narrowphase_stage.h"
-#include "parallel.h"
-#include "profile.h"
 #include "rubble/error.h"
-#include "shapes/shape.h"
+#include "world_impl.h"
 
 namespace rubble {
-
-using detail::BodySet;
-using detail::BodySlot;
-using detail::MovingBodies;
-using detail::Shape;
-
-namespace {
+namespace detail {
 
 std::string describe(Vec3 v) {
     std::ostringstream s;
@@ -55,7 +38,6 @@ void requireNonNegative(const char* where, const char* name, float f) {
     if (f < 0) fail(where, std::string(name) + " must be >= 0 (got " + std::to_string(f) + ")");
 }
 
-/// Unit quaternions are required; small drift (from user arithmetic) is normalised away, anything else refused.
 Quat requireUnit(const char* where, const char* name, Quat q) {
     if (!isFinite(q)) fail(where, std::string(name) + " is not finite " + describe(q));
     const float len = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
@@ -63,6 +45,25 @@ Quat requireUnit(const char* where, const char* name, Quat q) {
         fail(where, std::string(name) + " is not a unit quaternion " + describe(q) + ", length " + std::to_string(len));
     return {q.x / len, q.y / len, q.z / len, q.w / len};
 }
+
+void rotateDiagonal(Quat r, Vec3 d, float out[6]) {
+    const Vec3 c0 = rotate(r, {1, 0, 0}), c1 = rotate(r, {0, 1, 0}), c2 = rotate(r, {0, 0, 1});
+    auto entry = [&](int i, int j) {
+        const float ri[3] = {(&c0.x)[i], (&c1.x)[i], (&c2.x)[i]};
+        const float rj[3] = {(&c0.x)[j], (&c1.x)[j], (&c2.x)[j]};
+        return ri[0] * d.x * rj[0] + ri[1] * d.y * rj[1] + ri[2] * d.z * rj[2];
+    };
+    out[0] = entry(0, 0);
+    out[1] = entry(1, 1);
+    out[2] = entry(2, 2);
+    out[3] = entry(0, 1);
+    out[4] = entry(0, 2);
+    out[5] = entry(1, 2);
+}
+
+}  // namespace detail
+
+namespace {
 
 void validateMaterial(const char* where, const Material& m) {
     requireNonNegative(where, "material.friction", m.friction);
@@ -85,22 +86,6 @@ const char* bodyTypeName(BodyType t) {
     return "?";
 }
 
-/// R diag(d) R^T as the six entries of a symmetric matrix (xx, yy, zz, xy, xz, yz).
-void rotateDiagonal(Quat r, Vec3 d, float out[6]) {
-    const Vec3 c0 = rotate(r, {1, 0, 0}), c1 = rotate(r, {0, 1, 0}), c2 = rotate(r, {0, 0, 1});
-    auto entry = [&](int i, int j) {
-        const float ri[3] = {(&c0.x)[i], (&c1.x)[i], (&c2.x)[i]};
-        const float rj[3] = {(&c0.x)[j], (&c1.x)[j], (&c2.x)[j]};
-        return ri[0] * d.x * rj[0] + ri[1] * d.y * rj[1] + ri[2] * d.z * rj[2];
-    };
-    out[0] = entry(0, 0);
-    out[1] = entry(1, 1);
-    out[2] = entry(2, 2);
-    out[3] = entry(0, 1);
-    out[4] = entry(0, 2);
-    out[5] = entry(1, 2);
-}
-
 std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
     // FNV-1a over 64-bit words with a final avalanche per word: cheap, and any flipped bit changes the hash.
     h ^= v;
@@ -116,141 +101,6 @@ std::uint64_t bitsOf(float f) {
 }
 
 }  // namespace
-
-struct World::Impl {
-    WorldSettings settings;
-    std::unique_ptr<detail::TaskPool> pool;
-    detail::BodyStorage bodies;
-
-    std::vector<Shape> shapes;
-    std::vector<std::uint32_t> shapeGeneration;
-    std::vector<std::uint32_t> shapeUsers;
-    std::vector<bool> shapeAlive;
-    std::vector<std::uint32_t> freeShapes;
-
-    detail::IntegrationScratch integrationScratch;
-    detail::ShapeBoundsTable shapeBounds;
-    detail::Bounds movingBounds;
-    detail::BroadPhaseStage broadPhase;
-    detail::CandidatePairs pairs;
-    detail::NarrowPhaseStage narrowPhase;
-    detail::Contacts contacts;
-    detail::ContactCache contactCache;
-    std::vector<detail::PointImpulse> impulses;
-    std::vector<std::uint32_t> nonFinite;
-    std::vector<BodyId> frozenReports;
-
-    Profile profile;
-    std::uint64_t steps = 0;
-    detail::Clock::time_point origin = detail::Clock::now();
-
-    EffectSet effects;
-    bool effectsDirty = true;
-    bool anyDamping = false;
-    bool forcesPending = false;
-
-    explicit Impl(const WorldSettings& s) : settings(s), pool(std::make_unique<detail::TaskPool>(s.threads)) {}
-
-    const Shape& shapeOf(ShapeId id, const char* where) const {
-        if (id.isNull()) fail(where, "the shape handle is null");
-        if (id.index >= shapes.size() || !shapeAlive[id.index] || shapeGeneration[id.index] != id.generation)
-            fail(where, "shape handle (index " + std::to_string(id.index) + ", generation " +
-                            std::to_string(id.generation) + ") is stale or not from this world");
-        return shapes[id.index];
-    }
-
-    const BodySlot& slotOf(BodyId id, const char* where) const {
-        const BodySlot* slot = bodies.find(id);
-        if (!slot) {
-            if (id.isNull()) fail(where, "the body handle is null");
-            fail(where, "body handle (index " + std::to_string(id.index) + ", generation " +
-                            std::to_string(id.generation) + ") is stale or not from this world");
-        }
-        return *slot;
-    }
-
-    /// Dense index of a moving body, or -1 for a static one.
-    long movingIndex(BodyId id, const char* where) const {
-        const BodySlot& s = slotOf(id, where);
-        return s.set == BodySet::Moving ? static_cast<long>(s.dense) : -1;
-    }
-
-    bool isDynamic(std::uint32_t i) const {
-        return !(bodies.moving.flags[i] & (detail::kFlagKinematic | detail::kFlagFrozen));
-    }
-
-    Quat orientationOf(std::uint32_t i) const {
-        const MovingBodies& m = bodies.moving;
-        return {m.qx[i], m.qy[i], m.qz[i], m.qw[i]};
-    }
-
-    Vec3 comOf(std::uint32_t i) const { return {bodies.moving.px[i], bodies.moving.py[i], bodies.moving.pz[i]}; }
-
-    void refreshWorldInertia(std::uint32_t i) {
-        MovingBodies& m = bodies.moving;
-        const Quat r = orientationOf(i) * Quat{m.irx[i], m.iry[i], m.irz[i], m.irw[i]};
-        float w[6];
-        rotateDiagonal(r, {m.invIx[i], m.invIy[i], m.invIz[i]}, w);
-        m.iwXX[i] = w[0], m.iwYY[i] = w[1], m.iwZZ[i] = w[2], m.iwXY[i] = w[3], m.iwXZ[i] = w[4], m.iwYZ[i] = w[5];
-    }
-
-    Vec3 applyWorldInverseInertia(std::uint32_t i, Vec3 v) const {
-        const MovingBodies& m = bodies.moving;
-        return {m.iwXX[i] * v.x + m.iwXY[i] * v.y + m.iwXZ[i] * v.z,
-                m.iwXY[i] * v.x + m.iwYY[i] * v.y + m.iwYZ[i] * v.z,
-                m.iwXZ[i] * v.x + m.iwYZ[i] * v.y + m.iwZZ[i] * v.z};
-    }
-
-    /// Mass, inverse principal inertia and centre of mass of a moving body from its shape and density.
-    void setMassFromShape(std::uint32_t i) {
-        MovingBodies& m = bodies.moving;
-        const Shape& shape = shapes[m.shape[i]];
-        const Vec3 com = shape.unitMass.centerOfMass;
-        m.lcx[i] = com.x, m.lcy[i] = com.y, m.lcz[i] = com.z;
-        if (!isDynamic(i)) {
-            m.invMass[i] = 0;
-            m.invIx[i] = m.invIy[i] = m.invIz[i] = 0;
-            m.irx[i] = m.iry[i] = m.irz[i] = 0, m.irw[i] = 1;
-        } else {
-            const float density = m.density[i];
-            const detail::PrincipalInertia& pi = shape.unitPrincipal;
-            m.invMass[i] = 1.0f / (shape.unitMass.mass * density);
-            m.invIx[i] = pi.moments.x > 0 ? 1.0f / (pi.moments.x * density) : 0.0f;
-            m.invIy[i] = pi.moments.y > 0 ? 1.0f / (pi.moments.y * density) : 0.0f;
-            m.invIz[i] = pi.moments.z > 0 ? 1.0f / (pi.moments.z * density) : 0.0f;
-            m.irx[i] = pi.rotation.x, m.iry[i] = pi.rotation.y, m.irz[i] = pi.rotation.z, m.irw[i] = pi.rotation.w;
-        }
-        refreshWorldInertia(i);
-    }
-
-    /// A body whose state went non-finite stops being simulated (its last finite state is kept) and is reported.
-    void freeze(std::uint32_t i) {
-        MovingBodies& m = bodies.moving;
-        if (m.flags[i] & detail::kFlagFrozen) return;
-        m.flags[i] |= detail::kFlagFrozen;
-        m.invMass[i] = 0;
-        m.invIx[i] = m.invIy[i] = m.invIz[i] = 0;
-        m.gravityScale[i] = 0;
-        m.linearDamping[i] = m.angularDamping[i] = 0;
-        m.vx[i] = m.vy[i] = m.vz[i] = m.wx[i] = m.wy[i] = m.wz[i] = 0;
-        m.fx[i] = m.fy[i] = m.fz[i] = m.tx[i] = m.ty[i] = m.tz[i] = 0;
-        refreshWorldInertia(i);
-        const std::uint32_t slot = m.slot[i];
-        frozenReports.push_back(BodyId{slot, bodies.slots()[slot].generation});
-        profile.frozenCount += 1;
-    }
-
-    void freezeReported() {
-        for (std::uint32_t i : nonFinite) freeze(i);
-        nonFinite.clear();
-    }
-
-    void resolveEffectsIfDirty() {
-        if (!effectsDirty) return;
-        effects = detail::resolveEffects(settings.effects, settings, bodies.moving, bodies.statics, shapes, anyDamping);
-        effectsDirty = false;
-    }
-};
 
 World::World(const WorldSettings& settings) {
     if (settings.threads < 0)
