@@ -54,13 +54,30 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
                 if (!(old.key == key)) continue;
                 ++manifolds;
                 const Manifold& now = contacts.manifolds[m];
+                bool taken[kMaxManifoldPoints] = {};
+                bool matched[kMaxManifoldPoints] = {};
                 for (int i = 0; i < now.pointCount; ++i)
                     for (int j = 0; j < old.pointCount; ++j)
-                        if (now.points[i].feature == old.features[j]) {
+                        if (!taken[j] && now.points[i].feature == old.features[j]) {
                             impulses[m * kMaxManifoldPoints + i] = old.impulses[j];
+                            taken[j] = matched[i] = true;
                             ++points;
                             break;
                         }
+                for (int i = 0; i < now.pointCount; ++i) {
+                    if (matched[i]) continue;
+                    int best = -1;
+                    float bestDistanceSq = kContactMatchDistance * kContactMatchDistance;
+                    for (int j = 0; j < old.pointCount; ++j) {
+                        const Vec3 d = now.points[i].position - old.positions[j];
+                        const float distanceSq = dot(d, d);
+                        if (!taken[j] && distanceSq < bestDistanceSq) best = j, bestDistanceSq = distanceSq;
+                    }
+                    if (best < 0) continue;
+                    impulses[m * kMaxManifoldPoints + i] = old.impulses[best];
+                    taken[best] = true;
+                    ++points;
+                }
                 break;
             }
         }
@@ -86,6 +103,7 @@ void ContactCache::remember(const Contacts& contacts, const std::vector<PointImp
             e.pointCount = contacts.manifolds[m].pointCount;
             for (int i = 0; i < e.pointCount; ++i) {
                 e.features[i] = contacts.manifolds[m].points[i].feature;
+                e.positions[i] = contacts.manifolds[m].points[i].position;
                 e.impulses[i] = impulses[m * kMaxManifoldPoints + i];
             }
             // Claim the first free cell of the probe sequence. Which cell a key ends up in may depend on the

@@ -1,8 +1,10 @@
 #pragma once
 // Contact cache: manifolds persist across steps. Each step's manifolds are matched with last step's by body pair
 // (stable slots and generations, the compound children and the mesh triangle) and, within a manifold, points by
-// feature id; matched points carry their accumulated impulses so that the solver can warm start. Pairs that
-// separate are simply not matched again and are forgotten.
+// feature id, or failing that by position (a point within kContactMatchDistance of where an unmatched old point
+// was: the kernels may describe the same corner by other features when the reference face flips between two
+// equal boxes, and a stack that lost its impulses there would drop). Matched points carry their accumulated
+// impulses so that the solver can warm start. Pairs that separate are simply not matched again and are forgotten.
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +32,9 @@ struct ContactKey {
     }
 };
 
+/// How far a contact point may have moved in one step and still be the same point, m.
+inline constexpr float kContactMatchDistance = 0.02f;
+
 class ContactCache {
 public:
     /// Impulses for this step's manifolds: kMaxManifoldPoints per manifold, in `contacts` order, carried over from
@@ -47,6 +52,7 @@ private:
     struct Entry {
         ContactKey key;
         std::uint32_t features[kMaxManifoldPoints] = {};
+        Vec3 positions[kMaxManifoldPoints];
         PointImpulse impulses[kMaxManifoldPoints];
         int pointCount = 0;
     };

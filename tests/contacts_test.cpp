@@ -1,5 +1,6 @@
 // Contact cache: manifolds and points are matched across steps by stable keys and feature ids, impulses carry over
-// exactly, separated pairs are forgotten, and a body that reuses a slot inherits nothing.
+// exactly, separated pairs are forgotten, and a body that reuses a slot inherits nothing. Points whose feature is
+// new take the impulses of an unmatched old point within kContactMatchDistance.
 #include <gtest/gtest.h>
 
 #include "contacts.h"
@@ -13,7 +14,8 @@ namespace {
 Manifold manifoldWith(std::initializer_list<std::uint32_t> features) {
     Manifold m;
     m.normal = {0, -1, 0};
-    for (std::uint32_t f : features) m.points[m.pointCount++] = {{0, 0, 0}, 0.01f, f};
+    // Points one metre apart per feature id, so that only features match unless a test moves them.
+    for (std::uint32_t f : features) m.points[m.pointCount++] = {{static_cast<float>(f), 0, 0}, 0.01f, f};
     return m;
 }
 
@@ -68,6 +70,33 @@ TEST(ContactCache, CarriesImpulsesOfMatchingPointsAndForgetsTheRest) {
     step3.manifolds = {manifoldWith({7})};
     cache.warmStart(step3, f.storage, f.pool, impulses);
     EXPECT_EQ(cache.matchedManifolds(), 0u);
+}
+
+TEST(ContactCache, NewFeaturesTakeTheImpulsesOfAnOldPointNearby) {
+    Fixture f;
+    ContactCache cache;
+    Contacts step1;
+    step1.pairs = {{f.dense(0), f.dense(1)}};
+    step1.manifolds = {manifoldWith({10, 11})};
+    std::vector<PointImpulse> impulses;
+    cache.warmStart(step1, f.storage, f.pool, impulses);
+    impulses[0] = {5, 1, 2};
+    impulses[1] = {6, 3, 4};
+    cache.remember(step1, impulses, f.pool);
+
+    // The kernel now names the corner at x = 11 differently (a reference-face flip), 1 cm from where it was, and a
+    // third point appears 30 cm away from anything old.
+    Contacts step2;
+    step2.pairs = step1.pairs;
+    step2.manifolds = {manifoldWith({10, 50, 51})};
+    step2.manifolds[0].points[1].position = {11.01f, 0, 0};
+    step2.manifolds[0].points[2].position = {10.3f, 0, 0};
+    cache.warmStart(step2, f.storage, f.pool, impulses);
+    EXPECT_EQ(cache.matchedPoints(), 2u);
+    EXPECT_EQ(impulses[0].normal, 5.0f);  // by feature
+    EXPECT_EQ(impulses[1].normal, 6.0f);  // by position
+    EXPECT_EQ(impulses[1].tangent2, 4.0f);
+    EXPECT_EQ(impulses[2].normal, 0.0f);  // too far from the only old point left
 }
 
 TEST(ContactCache, ABodyReusingASlotInheritsNothingAndRemovalsKeepOthersMatched) {
