@@ -11,6 +11,7 @@ std::string_view stageName(Stage s) {
         "broad_phase",           //
         "narrow_phase",          //
         "contact_cache",         //
+        "solver",                //
         "integrate_positions",   //
     };
     // A stage added to the enum without a name here fails the build instead of printing an empty name.

@@ -30,6 +30,12 @@ constexpr std::array<std::pair<BroadPhaseKind, std::string_view>, 3> kBroadPhase
     {BroadPhaseKind::Grid, "grid"},
 }};
 
+constexpr std::array<std::pair<PositionCorrection, std::string_view>, 3> kPositionCorrectionNames{{
+    {PositionCorrection::SoftStep, "soft_step"},
+    {PositionCorrection::Baumgarte, "baumgarte"},
+    {PositionCorrection::SplitImpulse, "split_impulse"},
+}};
+
 template <class E, std::size_t N>
 std::string_view nameOf(const std::array<std::pair<E, std::string_view>, N>& table, E value) {
     for (const auto& [e, name] : table)
@@ -52,5 +58,10 @@ std::string_view integratorName(Integrator i) { return nameOf(kIntegratorNames, 
 std::optional<Integrator> integratorFromName(std::string_view name) { return valueOf(kIntegratorNames, name); }
 std::string_view broadPhaseName(BroadPhaseKind b) { return nameOf(kBroadPhaseNames, b); }
 std::optional<BroadPhaseKind> broadPhaseFromName(std::string_view name) { return valueOf(kBroadPhaseNames, name); }
+
+std::string_view positionCorrectionName(PositionCorrection p) { return nameOf(kPositionCorrectionNames, p); }
+std::optional<PositionCorrection> positionCorrectionFromName(std::string_view name) {
+    return valueOf(kPositionCorrectionNames, name);
+}
 
 }  // namespace rubble

@@ -520,9 +520,14 @@ void World::step(float dt) {
     const bool velocitiesChange = w.effects.has(Effect::Gravity) || params.rotation || w.forcesPending ||
                                   w.anyDamping || params.integrator != Integrator::SemiImplicitEuler;
 
+    const SolverSettings& solver = w.settings.solver;
+    const bool softStep = solver.positionCorrection == PositionCorrection::SoftStep;
+    const bool splitImpulse = solver.positionCorrection == PositionCorrection::SplitImpulse;
+    bool collided = false;
     for (int sub = 0; sub < substeps; ++sub) {
+        const bool lastSub = sub == substeps - 1;
         params.forces = w.forcesPending;
-        params.clearForces = sub == substeps - 1;
+        params.clearForces = lastSub;
         if (velocitiesChange) {
             detail::StageTimer timer(profile, Stage::IntegrateVelocities, w.origin);
             detail::integrateVelocities(w.bodies.moving, params, w.integrationScratch, *w.pool, w.nonFinite);
@@ -532,6 +537,7 @@ void World::step(float dt) {
         // exist only where a moving body can meet another body.
         const std::uint32_t moving = w.bodies.moving.size();
         if (sub == 0 && (moving > 1 || (moving == 1 && w.bodies.statics.size() > 0))) {
+            collided = true;
             {
                 detail::StageTimer timer(profile, Stage::UpdateBounds, w.origin);
                 detail::updateBounds(w.bodies.moving, w.shapeBounds, detail::BoundsParams{dt, w.settings.contactMargin},
@@ -556,17 +562,54 @@ void World::step(float dt) {
             {
                 detail::StageTimer timer(profile, Stage::ContactCache, w.origin);
                 w.contactCache.warmStart(w.contacts, w.bodies, *w.pool, w.impulses);
-                // The solver will sit between these two: it starts from the carried impulses and leaves its own.
-                w.contactCache.remember(w.contacts, w.impulses, *w.pool);
             }
             profile.matchedManifolds = w.contactCache.matchedManifolds();
             profile.warmStartedPoints = w.contactCache.matchedPoints();
+            {
+                detail::StageTimer timer(profile, Stage::Solver, w.origin);
+                w.contactSolver.prepare(w.contacts, w.impulses, w.bodies, w.settings, w.effects, params.dt, *w.pool);
+            }
+            const detail::ContactSolverStats& stats = w.contactSolver.stats();
+            profile.constraints = stats.constraints;
+            profile.colors = stats.colors;
+            profile.laneOccupancy = stats.laneOccupancy;
+        }
+        const bool solve = collided && !w.contactSolver.empty();
+        if (solve) {
+            detail::StageTimer timer(profile, Stage::Solver, w.origin);
+            detail::ContactSolver& cs = w.contactSolver;
+            cs.loadBodies(w.bodies.moving, *w.pool);
+            if (solver.warmStarting) cs.warmStart(*w.pool);
+            for (int i = 0; i < w.settings.velocityIterations; ++i) cs.solveVelocities(true, *w.pool);
+            if (splitImpulse)
+                for (int i = 0; i < w.settings.positionIterations; ++i) cs.solvePositions(*w.pool);
+            cs.storeVelocities(w.bodies.moving, *w.pool);
         }
         {
             detail::StageTimer timer(profile, Stage::IntegratePositions, w.origin);
             detail::integratePositions(w.bodies.moving, params, w.integrationScratch, *w.pool, w.nonFinite);
         }
         w.freezeReported();
+        if (solve) {
+            // After the move: relax (soft step) takes the push-out velocity away again; bounces come last.
+            detail::StageTimer timer(profile, Stage::Solver, w.origin);
+            detail::ContactSolver& cs = w.contactSolver;
+            if (splitImpulse) cs.applyPseudoVelocities(w.bodies.moving, *w.pool);
+            const bool relax = softStep && w.settings.positionIterations > 0;
+            const bool bounce = lastSub && w.effects.has(Effect::Restitution);
+            if (relax || bounce) {
+                cs.loadBodies(w.bodies.moving, *w.pool);
+                if (relax)
+                    for (int i = 0; i < w.settings.positionIterations; ++i) cs.solveVelocities(false, *w.pool);
+                if (bounce) cs.applyRestitution(*w.pool);
+                cs.storeVelocities(w.bodies.moving, *w.pool);
+            }
+        }
+    }
+    if (collided) {
+        detail::StageTimer timer(profile, Stage::ContactCache, w.origin);
+        w.contactSolver.storeImpulses(w.impulses);
+        w.contactCache.remember(w.contacts, w.impulses, *w.pool);
     }
     w.forcesPending = false;
 

@@ -16,6 +16,7 @@
 #include "profile.h"
 #include "rubble/world.h"
 #include "shapes/shape.h"
+#include "solver/contact_solver.h"
 
 namespace rubble {
 namespace detail {
@@ -65,6 +66,7 @@ struct World::Impl {
     detail::Contacts contacts;
     detail::ContactCache contactCache;
     std::vector<detail::PointImpulse> impulses;
+    detail::ContactSolver contactSolver;
     std::vector<std::uint32_t> nonFinite;
     std::vector<BodyId> frozenReports;
 

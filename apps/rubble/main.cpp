@@ -219,9 +219,10 @@ int run(const Options& options) {
         std::printf("\n");
         std::printf("cache      %u of %u manifolds continue last step's, %u of %u points warm-started\n",
                     last.matchedManifolds, last.manifolds, last.warmStartedPoints, last.contactPoints);
-        std::printf(
-            "note       the solver is not built yet: contacts are found, but bodies still pass through each\n"
-            "           other, the ground and the terrain; the figures below show it.\n");
+        std::printf("solver     %u constraints in %u colours, SIMD lanes %.0f%% filled; %s, %d+%d iterations\n",
+                    last.constraints, last.colors, 100.0 * last.laneOccupancy,
+                    std::string(rubble::positionCorrectionName(scene.settings.solver.positionCorrection)).c_str(),
+                    scene.settings.velocityIterations, scene.settings.positionIterations);
     } else {
         std::printf("\nstep       median %.4f ms over %zu steps\n", stepMedian, stepMs.size());
     }

@@ -14,6 +14,7 @@ enum class Stage : std::uint8_t {
     BroadPhase,
     NarrowPhase,
     ContactCache,
+    Solver,
     IntegratePositions,
     Count,
 };
@@ -45,9 +46,12 @@ struct Profile {
     std::uint32_t meshTriangles = 0;  ///< triangles handed over with the mesh pairs
     std::uint32_t manifolds = 0;      ///< contact manifolds (touching or speculative pairs)
     std::uint32_t contactPoints = 0;
-    std::uint32_t unsupportedPairs = 0;   ///< candidate pairs whose shape kinds have no narrow-phase kernel yet
     std::uint32_t matchedManifolds = 0;   ///< manifolds that continue one of the previous step (same pair and parts)
     std::uint32_t warmStartedPoints = 0;  ///< points whose feature matched: they start from last step's impulses
+    std::uint32_t unsupportedPairs = 0;   ///< candidate pairs whose shape kinds have no narrow-phase kernel yet
+    std::uint32_t constraints = 0;        ///< contact manifolds the solver works on (a dynamic body on one side)
+    std::uint32_t colors = 0;             ///< graph colours of the contact constraints
+    float laneOccupancy = 0;              ///< filled SIMD lanes over lanes used by the solver, in [0, 1]
 
     const StageTiming& operator[](Stage s) const { return stages[static_cast<int>(s)]; }
     StageTiming& operator[](Stage s) { return stages[static_cast<int>(s)]; }

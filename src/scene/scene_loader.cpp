@@ -410,6 +410,11 @@ const std::string& getString(const Json& j, const Loc& at) {
     return j.get_ref<const std::string&>();
 }
 
+bool getBool(const Json& j, const Loc& at) {
+    if (!j.is_boolean()) at.fail("expected true or false, got " + describe(j));
+    return j.get<bool>();
+}
+
 const Json& expectObject(const Json& j, const Loc& at, std::string_view what = "an object") {
     if (!j.is_object()) at.fail("expected " + std::string(what) + ", got " + describe(j));
     return j;
@@ -529,7 +534,7 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
     expectObject(j, at);
     checkKeys(j, at,
               {"dt", "gravity", "substeps", "velocity_iterations", "position_iterations", "threads", "integrator",
-               "effects", "broadphase"});
+               "effects", "broadphase", "position_correction", "warm_starting"});
     WorldSettings& s = scene.settings;
     if (j.contains("dt")) s.timeStep = getFloat(j["dt"], at / "dt", Sign::Positive);
     if (j.contains("gravity")) s.gravity = getVec3(j["gravity"], at / "gravity");
@@ -551,6 +556,20 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
         }
         s.integrator = *v;
     }
+    if (j.contains("position_correction")) {
+        const std::string& name = getString(j["position_correction"], at / "position_correction");
+        const auto v = positionCorrectionFromName(name);
+        if (!v) {
+            std::vector<std::string> names;
+            for (const auto p :
+                 {PositionCorrection::SoftStep, PositionCorrection::Baumgarte, PositionCorrection::SplitImpulse})
+                names.emplace_back(positionCorrectionName(p));
+            (at / "position_correction")
+                .fail("unknown position correction '" + printable(name) + "'" + suggestion(name, names));
+        }
+        s.solver.positionCorrection = *v;
+    }
+    if (j.contains("warm_starting")) s.solver.warmStarting = getBool(j["warm_starting"], at / "warm_starting");
     if (j.contains("broadphase")) {
         const std::string& name = getString(j["broadphase"], at / "broadphase");
         const auto v = broadPhaseFromName(name);

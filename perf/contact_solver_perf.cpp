@@ -1,0 +1,73 @@
+// Contact solver kernels: manifolds solved per second by one velocity iteration, the wide kernels (a batch of
+// simd::kLanes manifolds per call) against the one-lane scalar kernels over the same rows. 20,000 manifolds over
+// 3,000 bodies, about S1's size, so that body rows are gathered from memory the way the real solve meets them.
+// Whole-scene solver time at 1 and 2 threads is in scenes_perf.cpp (the solver_ms counter).
+#include <benchmark/benchmark.h>
+
+#include <random>
+#include <vector>
+
+#include "solver/contact_batch.h"
+#include "support/contact_batches.h"
+
+namespace {
+
+using rubble::detail::BodyRows;
+using rubble::detail::ContactBatch;
+using rubble::detail::kBatchLanes;
+
+constexpr std::int32_t kBodies = 3000;
+constexpr std::size_t kManifolds = 20000;
+
+struct Problem {
+    std::vector<ContactBatch> batches;
+    std::vector<float> rows[18];
+
+    Problem() {
+        std::mt19937 rng(42);
+        batches.resize(kManifolds / kBatchLanes);
+        std::uniform_int_distribution<std::int32_t> first(0, kBodies - 2 * static_cast<std::int32_t>(kBatchLanes));
+        for (ContactBatch& b : batches) rubble::test::fillRandomBatch(b, rng, kBodies, first(rng));
+        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+        for (auto& r : rows) {
+            r.resize(kBodies + 2);
+            for (float& x : r) x = 0.01f * u(rng);
+            r[kBodies] = 0.0f;
+        }
+    }
+    BodyRows bodyRows() {
+        return {rows[0].data(),  rows[1].data(),  rows[2].data(),  rows[3].data(),  rows[4].data(),
+                rows[5].data(),  rows[6].data(),  rows[7].data(),  rows[8].data(),  rows[9].data(),
+                rows[10].data(), rows[11].data(), rows[12].data(), rows[13].data(), rows[14].data(),
+                rows[15].data(), rows[16].data(), rows[17].data(), kBodies + 1};
+    }
+};
+
+void BM_ContactSolveWide(benchmark::State& state) {
+    Problem p;
+    const BodyRows rows = p.bodyRows();
+    rubble::detail::SolveParams params;
+    for (auto _ : state) {
+        for (ContactBatch& b : p.batches)
+            rubble::detail::contact_kernels::solve<rubble::simd::FloatW, true>(b, 0, rows, params);
+        benchmark::ClobberMemory();
+    }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p.batches.size() * kBatchLanes));
+}
+BENCHMARK(BM_ContactSolveWide)->Unit(benchmark::kMicrosecond);
+
+void BM_ContactSolveScalar(benchmark::State& state) {
+    Problem p;
+    const BodyRows rows = p.bodyRows();
+    rubble::detail::SolveParams params;
+    for (auto _ : state) {
+        for (ContactBatch& b : p.batches)
+            for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
+                rubble::detail::contact_kernels::solve<float, true>(b, lane, rows, params);
+        benchmark::ClobberMemory();
+    }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p.batches.size() * kBatchLanes));
+}
+BENCHMARK(BM_ContactSolveScalar)->Unit(benchmark::kMicrosecond);
+
+}  // namespace

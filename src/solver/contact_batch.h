@@ -1,0 +1,295 @@
+#pragma once
+// A batch of contact constraints, one manifold per SIMD lane, and the solver kernels over it. The kernels are
+// written once over a lane type F: FloatW runs a whole batch per call, float runs one lane (the scalar reference
+// the tests compare the wide kernels with, and that perf/ measures them against).
+#include <cstdint>
+
+#include "narrowphase/manifold.h"
+#include "simd/vec.h"
+
+namespace rubble::detail {
+
+inline constexpr std::size_t kBatchLanes = simd::kLanes;
+
+/// Up to kBatchLanes manifolds in SoA form. A lane with no manifold, and a point beyond a manifold's count, has
+/// zero masses, so every impulse it computes is zero. Static bodies read the still row; only dynamic bodies are
+/// written back (the kernels redirect other writes to a scratch row).
+struct alignas(64) ContactBatch {
+    using Lanes = float[kBatchLanes];
+    std::int32_t bodyA[kBatchLanes];
+    std::int32_t bodyB[kBatchLanes];
+    Lanes nx, ny, nz;     ///< normal, from A to B
+    Lanes t1x, t1y, t1z;  ///< friction directions: t1, t2, n right-handed
+    Lanes t2x, t2y, t2z;
+    Lanes invMassA, invMassB;
+    Lanes iaXX, iaYY, iaZZ, iaXY, iaXZ, iaYZ;  ///< world inverse inertia of A
+    Lanes ibXX, ibYY, ibZZ, ibXY, ibXZ, ibYZ;
+    Lanes friction, restitution;
+    Lanes biasRate;      ///< overlap fed back as approach speed, 1/s
+    Lanes massScale;     ///< soft constraint: share of the rigid response...
+    Lanes impulseScale;  ///< ...and of the accumulated impulse taken away each iteration
+    Lanes slop;          ///< overlap left alone by the bias (Baumgarte)
+    struct Point {
+        Lanes rAx, rAy, rAz;  ///< contact point from A's centre of mass at prepare()
+        Lanes rBx, rBy, rBz;
+        Lanes separation;  ///< at prepare(), less the anchors' normal offset: current = this + n . (xB - xA)
+        Lanes normalMass, tangentMass1, tangentMass2;
+        Lanes normalImpulse, tangentImpulse1, tangentImpulse2;
+        Lanes pseudoImpulse;     ///< split impulses
+        Lanes relativeVelocity;  ///< normal approach speed at prepare(), for restitution
+        Lanes maxNormalImpulse;  ///< largest normal impulse of the step: zero means the point never pushed
+    } points[kMaxManifoldPoints];
+};
+
+/// Row pointers of SolverBodies, with the scratch row this worker may write.
+struct BodyRows {
+    float *vx, *vy, *vz, *wx, *wy, *wz;
+    const float *dpx, *dpy, *dpz, *dax, *day, *daz;
+    float *pvx, *pvy, *pvz, *pwx, *pwy, *pwz;
+    std::int32_t scratchRow;
+};
+
+/// Solve-wide constants.
+struct SolveParams {
+    float invH = 60;  ///< 1 / substep
+    float maxPushOutVelocity = 3;
+    bool useBias = true;
+    /// The bodies moved since prepare() (later substeps, relax): separations follow their motion. When false the
+    /// motion rows are all zero and are not read.
+    bool moved = true;
+};
+
+namespace contact_kernels {
+
+using simd::Vec3W;
+
+template <class F>
+using IndexOf = simd::IntOf<F>;
+
+template <class F>
+F at(const float* lanes, std::size_t lane) {
+    return simd::load<F>(lanes + lane);
+}
+
+template <class F>
+Vec3W<F> at3(const float* x, const float* y, const float* z, std::size_t lane) {
+    return {at<F>(x, lane), at<F>(y, lane), at<F>(z, lane)};
+}
+
+template <class F>
+void put(float* lanes, std::size_t lane, const F& v) {
+    simd::store(lanes + lane, v);
+}
+
+template <class F>
+Vec3W<F> gather3(const float* x, const float* y, const float* z, const IndexOf<F>& index) {
+    return {simd::gather(x, index), simd::gather(y, index), simd::gather(z, index)};
+}
+
+template <class F>
+void scatter3(float* x, float* y, float* z, const IndexOf<F>& index, const Vec3W<F>& v) {
+    simd::scatter(x, index, v.x);
+    simd::scatter(y, index, v.y);
+    simd::scatter(z, index, v.z);
+}
+
+template <class F>
+simd::SymMat3W<F> inertiaA(const ContactBatch& b, std::size_t lane) {
+    return {at<F>(b.iaXX, lane), at<F>(b.iaYY, lane), at<F>(b.iaZZ, lane),
+            at<F>(b.iaXY, lane), at<F>(b.iaXZ, lane), at<F>(b.iaYZ, lane)};
+}
+
+template <class F>
+simd::SymMat3W<F> inertiaB(const ContactBatch& b, std::size_t lane) {
+    return {at<F>(b.ibXX, lane), at<F>(b.ibYY, lane), at<F>(b.ibZZ, lane),
+            at<F>(b.ibXY, lane), at<F>(b.ibXZ, lane), at<F>(b.ibYZ, lane)};
+}
+
+/// The two bodies of a batch as loaded from the rows, and where to write them back.
+template <class F>
+struct Pair {
+    IndexOf<F> readA, readB, writeA, writeB;
+    Vec3W<F> vA, wA, vB, wB;
+    F mA, mB;
+    simd::SymMat3W<F> iA, iB;
+
+    Pair(const ContactBatch& b, std::size_t lane, const float* vx, const float* vy, const float* vz, const float* wx,
+         const float* wy, const float* wz, std::int32_t scratchRow) {
+        readA = simd::loadInt<IndexOf<F>>(b.bodyA + lane);
+        readB = simd::loadInt<IndexOf<F>>(b.bodyB + lane);
+        mA = at<F>(b.invMassA, lane);
+        mB = at<F>(b.invMassB, lane);
+        const IndexOf<F> scratch(scratchRow);
+        writeA = simd::select(mA > F(0.0f), readA, scratch);
+        writeB = simd::select(mB > F(0.0f), readB, scratch);
+        vA = gather3<F>(vx, vy, vz, readA);
+        wA = gather3<F>(wx, wy, wz, readA);
+        vB = gather3<F>(vx, vy, vz, readB);
+        wB = gather3<F>(wx, wy, wz, readB);
+        iA = inertiaA<F>(b, lane);
+        iB = inertiaB<F>(b, lane);
+    }
+
+    void store(float* vx, float* vy, float* vz, float* wx, float* wy, float* wz) const {
+        // A before B: when both are the scratch row the value written there does not matter.
+        scatter3<F>(vx, vy, vz, writeA, vA);
+        scatter3<F>(wx, wy, wz, writeA, wA);
+        scatter3<F>(vx, vy, vz, writeB, vB);
+        scatter3<F>(wx, wy, wz, writeB, wB);
+    }
+
+    Vec3W<F> relativeVelocity(const Vec3W<F>& rA, const Vec3W<F>& rB) const {
+        return (vB + cross(wB, rB)) - (vA + cross(wA, rA));
+    }
+
+    void apply(const Vec3W<F>& rA, const Vec3W<F>& rB, const Vec3W<F>& impulse) {
+        vA -= impulse * mA;
+        wA -= iA * cross(rA, impulse);
+        vB += impulse * mB;
+        wB += iB * cross(rB, impulse);
+    }
+};
+
+template <class F>
+Vec3W<F> anchorA(const ContactBatch::Point& p, std::size_t lane) {
+    return at3<F>(p.rAx, p.rAy, p.rAz, lane);
+}
+template <class F>
+Vec3W<F> anchorB(const ContactBatch::Point& p, std::size_t lane) {
+    return at3<F>(p.rBx, p.rBy, p.rBz, lane);
+}
+
+/// Applies the accumulated impulses of every point.
+template <class F>
+void warmStart(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
+    Pair<F> pair(b, lane, rows.vx, rows.vy, rows.vz, rows.wx, rows.wy, rows.wz, rows.scratchRow);
+    const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
+    const Vec3W<F> t1 = at3<F>(b.t1x, b.t1y, b.t1z, lane);
+    const Vec3W<F> t2 = at3<F>(b.t2x, b.t2y, b.t2z, lane);
+    for (const ContactBatch::Point& p : b.points) {
+        const Vec3W<F> impulse = n * at<F>(p.normalImpulse, lane) + t1 * at<F>(p.tangentImpulse1, lane) +
+                                 t2 * at<F>(p.tangentImpulse2, lane);
+        pair.apply(anchorA<F>(p, lane), anchorB<F>(p, lane), impulse);
+    }
+    pair.store(rows.vx, rows.vy, rows.vz, rows.wx, rows.wy, rows.wz);
+}
+
+/// Current separation of a point: at prepare() plus the bodies' motion since, the rotation linearised (the
+/// anchors turn by less than a step's worth).
+template <class F>
+F separation(const ContactBatch::Point& p, std::size_t lane, const Vec3W<F>& n, const Vec3W<F>& rA, const Vec3W<F>& rB,
+             const Vec3W<F>& dpA, const Vec3W<F>& daA, const Vec3W<F>& dpB, const Vec3W<F>& daB) {
+    const Vec3W<F> d = (dpB + cross(daB, rB)) - (dpA + cross(daA, rA));
+    return at<F>(p.separation, lane) + dot(n, d);
+}
+
+/// One velocity iteration: friction at every point (within the cone of last iteration's normal impulse), then the
+/// normal impulses, Gauss-Seidel within the manifold.
+template <class F, bool Friction>
+void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveParams& params) {
+    Pair<F> pair(b, lane, rows.vx, rows.vy, rows.vz, rows.wx, rows.wy, rows.wz, rows.scratchRow);
+    const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
+    if constexpr (Friction) {
+        const Vec3W<F> t1 = at3<F>(b.t1x, b.t1y, b.t1z, lane);
+        const Vec3W<F> t2 = at3<F>(b.t2x, b.t2y, b.t2z, lane);
+        const F mu = at<F>(b.friction, lane);
+        for (ContactBatch::Point& p : b.points) {
+            const Vec3W<F> rA = anchorA<F>(p, lane), rB = anchorB<F>(p, lane);
+            const Vec3W<F> dv = pair.relativeVelocity(rA, rB);
+            const F old1 = at<F>(p.tangentImpulse1, lane), old2 = at<F>(p.tangentImpulse2, lane);
+            F new1 = old1 - at<F>(p.tangentMass1, lane) * dot(dv, t1);
+            F new2 = old2 - at<F>(p.tangentMass2, lane) * dot(dv, t2);
+            // Coulomb's cone, not a box: the tangent impulse as a vector is clamped to mu times the normal one.
+            const F limit = mu * at<F>(p.normalImpulse, lane);
+            const F lengthSq = new1 * new1 + new2 * new2;
+            const auto outside = lengthSq > limit * limit;
+            const F scale = simd::select(outside, limit / simd::sqrt(simd::max(lengthSq, F(1e-30f))), F(1.0f));
+            new1 = new1 * scale;
+            new2 = new2 * scale;
+            put(p.tangentImpulse1, lane, new1);
+            put(p.tangentImpulse2, lane, new2);
+            pair.apply(rA, rB, t1 * (new1 - old1) + t2 * (new2 - old2));
+        }
+    }
+    Vec3W<F> dpA = Vec3W<F>::zero(), daA = dpA, dpB = dpA, daB = dpA;
+    if (params.moved) {
+        dpA = gather3<F>(rows.dpx, rows.dpy, rows.dpz, pair.readA);
+        daA = gather3<F>(rows.dax, rows.day, rows.daz, pair.readA);
+        dpB = gather3<F>(rows.dpx, rows.dpy, rows.dpz, pair.readB);
+        daB = gather3<F>(rows.dax, rows.day, rows.daz, pair.readB);
+    }
+    const F invH(params.invH);
+    const F biasRate = at<F>(b.biasRate, lane), slop = at<F>(b.slop, lane);
+    const F massScale = params.useBias ? at<F>(b.massScale, lane) : F(1.0f);
+    const F impulseScale = params.useBias ? at<F>(b.impulseScale, lane) : F(0.0f);
+    const F maxPush(-params.maxPushOutVelocity);
+    for (ContactBatch::Point& p : b.points) {
+        const Vec3W<F> rA = anchorA<F>(p, lane), rB = anchorB<F>(p, lane);
+        const F s = separation(p, lane, n, rA, rB, dpA, daA, dpB, daB);
+        const auto apart = s > F(0.0f);
+        // Apart: the bodies may close the gap this substep and no more (speculative contact). Overlapping: push
+        // out at a rate the correction method sets, never faster than maxPushOutVelocity.
+        F bias = simd::max(biasRate * simd::min(s + slop, F(0.0f)), maxPush);
+        if (!params.useBias) bias = F(0.0f);
+        bias = simd::select(apart, s * invH, bias);
+        const F scaleM = simd::select(apart, F(1.0f), massScale);
+        const F scaleI = simd::select(apart, F(0.0f), impulseScale);
+        const F old = at<F>(p.normalImpulse, lane);
+        const F vn = dot(pair.relativeVelocity(rA, rB), n);
+        const F delta = F(0.0f) - at<F>(p.normalMass, lane) * scaleM * (vn + bias) - scaleI * old;
+        const F updated = simd::max(old + delta, F(0.0f));
+        put(p.normalImpulse, lane, updated);
+        put(p.maxNormalImpulse, lane, simd::max(at<F>(p.maxNormalImpulse, lane), updated - old));
+        pair.apply(rA, rB, n * (updated - old));
+    }
+    pair.store(rows.vx, rows.vy, rows.vz, rows.wx, rows.wy, rows.wz);
+}
+
+/// Split impulses: the overlap beyond the slop is removed through pseudo-velocities, which move the bodies this
+/// substep and are then forgotten, so that push-out never becomes kinetic energy.
+template <class F>
+void solvePositions(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveParams& params) {
+    Pair<F> pair(b, lane, rows.pvx, rows.pvy, rows.pvz, rows.pwx, rows.pwy, rows.pwz, rows.scratchRow);
+    const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
+    const Vec3W<F> dpA = gather3<F>(rows.dpx, rows.dpy, rows.dpz, pair.readA);
+    const Vec3W<F> daA = gather3<F>(rows.dax, rows.day, rows.daz, pair.readA);
+    const Vec3W<F> dpB = gather3<F>(rows.dpx, rows.dpy, rows.dpz, pair.readB);
+    const Vec3W<F> daB = gather3<F>(rows.dax, rows.day, rows.daz, pair.readB);
+    const F biasRate = at<F>(b.biasRate, lane), slop = at<F>(b.slop, lane);
+    const F maxPush(params.maxPushOutVelocity);
+    for (ContactBatch::Point& p : b.points) {
+        const Vec3W<F> rA = anchorA<F>(p, lane), rB = anchorB<F>(p, lane);
+        const F s = separation(p, lane, n, rA, rB, dpA, daA, dpB, daB);
+        const F target = simd::min(F(0.0f) - biasRate * simd::min(s + slop, F(0.0f)), maxPush);
+        const F old = at<F>(p.pseudoImpulse, lane);
+        const F vn = dot(pair.relativeVelocity(rA, rB), n);
+        const F updated = simd::max(old + at<F>(p.normalMass, lane) * (target - vn), F(0.0f));
+        put(p.pseudoImpulse, lane, updated);
+        pair.apply(rA, rB, n * (updated - old));
+    }
+    pair.store(rows.pvx, rows.pvy, rows.pvz, rows.pwx, rows.pwy, rows.pwz);
+}
+
+/// Reverses approach speeds above the threshold by the restitution coefficient, at points that pushed this step.
+template <class F>
+void restitution(ContactBatch& b, std::size_t lane, const BodyRows& rows, float threshold) {
+    Pair<F> pair(b, lane, rows.vx, rows.vy, rows.vz, rows.wx, rows.wy, rows.wz, rows.scratchRow);
+    const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
+    const F e = at<F>(b.restitution, lane);
+    for (ContactBatch::Point& p : b.points) {
+        const F approach = at<F>(p.relativeVelocity, lane);
+        const auto bounces = simd::andMask(approach<F(-threshold), at<F>(p.maxNormalImpulse, lane)> F(0.0f));
+        if (simd::none(bounces)) continue;
+        const Vec3W<F> rA = anchorA<F>(p, lane), rB = anchorB<F>(p, lane);
+        const F vn = dot(pair.relativeVelocity(rA, rB), n);
+        const F old = at<F>(p.normalImpulse, lane);
+        const F delta = F(0.0f) - at<F>(p.normalMass, lane) * (vn + e * approach);
+        const F updated = simd::select(bounces, simd::max(old + delta, F(0.0f)), old);
+        put(p.normalImpulse, lane, updated);
+        pair.apply(rA, rB, n * (updated - old));
+    }
+    pair.store(rows.vx, rows.vy, rows.vz, rows.wx, rows.wy, rows.wz);
+}
+
+}  // namespace contact_kernels
+}  // namespace rubble::detail

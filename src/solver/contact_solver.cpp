@@ -1,0 +1,435 @@
+#include "solver/contact_solver.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+
+#include "parallel.h"
+
+namespace rubble::detail {
+namespace {
+
+constexpr std::size_t kBodyChunk = 4096;
+constexpr std::size_t kManifoldChunk = 1024;
+/// Batches per task inside a colour: small enough that two threads share a colour of a few thousand manifolds,
+/// large enough that a task outweighs its dispatch.
+constexpr std::size_t kBatchChunk = 8;
+/// Colours beyond this go to one overflow set solved lane by lane on one thread (bodies with more than 63
+/// neighbours of their own colour are rare: a heap of debris around one big body).
+constexpr std::uint32_t kMaxColors = 63;
+constexpr std::uint32_t kOverflowColor = kMaxColors;
+constexpr std::uint32_t kNoColor = ~0u;
+
+/// Friction directions from the normal: the helper axis follows the normal's largest component, so the basis
+/// is continuous for every normal near a coordinate axis (ground, walls, stacked boxes) and the carried friction
+/// impulses keep their meaning from step to step.
+void tangentBasis(Vec3 n, Vec3& t1, Vec3& t2) {
+    const float ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
+    Vec3 helper;
+    if (ay >= ax && ay >= az)
+        helper = {1, 0, 0};
+    else if (ax >= az)
+        helper = {0, 0, 1};
+    else
+        helper = {0, 1, 0};
+    t1 = cross(helper, n);
+    t1 = t1 * (1.0f / length(t1));
+    t2 = cross(n, t1);
+}
+
+struct Softness {
+    float biasRate = 0, massScale = 1, impulseScale = 0;
+};
+
+/// A spring-damper contact solved implicitly over the substep h (the soft step's contact): the bias rate,
+/// and how much of the rigid response and of the accumulated impulse each iteration uses.
+Softness soft(float hertz, float dampingRatio, float h) {
+    const float omega = 2.0f * 3.14159265358979f * hertz;
+    const float a1 = 2.0f * dampingRatio + h * omega;
+    const float a2 = h * omega * a1;
+    const float a3 = 1.0f / (1.0f + a2);
+    return {omega / a1, a2 * a3, a3};
+}
+
+Vec3 applyInertia(const float* i, Vec3 v) {
+    // xx, yy, zz, xy, xz, yz
+    return {i[0] * v.x + i[3] * v.y + i[4] * v.z, i[3] * v.x + i[1] * v.y + i[5] * v.z,
+            i[4] * v.x + i[5] * v.y + i[2] * v.z};
+}
+
+}  // namespace
+
+void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImpulse>& warm, const BodyStorage& storage,
+                            const WorldSettings& settings, EffectSet effects, float h, TaskPool& pool) {
+    settings_ = settings.solver;
+    h_ = h;
+    friction_ = effects.has(Effect::Friction);
+    rotation_ = effects.has(Effect::Rotation);
+    const bool bounce = effects.has(Effect::Restitution);
+    scratchRows_ = std::max(1, pool.threadCount());
+    const MovingBodies& m = storage.moving;
+    const StaticBodies& s = storage.statics;
+    const std::size_t manifoldCount = contacts.manifolds.size();
+
+    // Solver indices in order of first appearance and greedy colouring in manifold order: both serial, both
+    // linear, and both depend only on the manifolds' canonical order.
+    solverIndex_.assign(m.size(), -1);
+    bodies_.moving.clear();
+    bodyColors_.clear();
+    colorOf_.resize(manifoldCount);
+    std::uint32_t colorCounts[kMaxColors + 1] = {};
+    const auto isDynamic = [&](std::uint32_t dense) {
+        return (m.flags[dense] & (kFlagKinematic | kFlagFrozen)) == 0 && m.invMass[dense] > 0;
+    };
+    const auto touch = [&](std::uint32_t dense) {
+        if (solverIndex_[dense] < 0) {
+            solverIndex_[dense] = static_cast<std::int32_t>(bodies_.moving.size());
+            bodies_.moving.push_back(dense);
+            bodyColors_.push_back(0);
+        }
+        return static_cast<std::uint32_t>(solverIndex_[dense]);
+    };
+    std::uint32_t constraints = 0;
+    for (std::size_t k = 0; k < manifoldCount; ++k) {
+        const ContactPair& p = contacts.pairs[k];
+        const bool dynA = !p.aStatic && isDynamic(p.a), dynB = !p.bStatic && isDynamic(p.b);
+        if (!dynA && !dynB) {
+            colorOf_[k] = kNoColor;
+            continue;
+        }
+        std::uint64_t used = 0;
+        std::uint32_t ia = 0, ib = 0;
+        if (!p.aStatic) ia = touch(p.a);
+        if (!p.bStatic) ib = touch(p.b);
+        if (dynA) used |= bodyColors_[ia];
+        if (dynB) used |= bodyColors_[ib];
+        std::uint32_t color = static_cast<std::uint32_t>(std::countr_one(used));
+        if (color >= kMaxColors) {
+            color = kOverflowColor;
+        } else {
+            if (dynA) bodyColors_[ia] |= std::uint64_t{1} << color;
+            if (dynB) bodyColors_[ib] |= std::uint64_t{1} << color;
+        }
+        colorOf_[k] = color;
+        colorCounts[color] += 1;
+        constraints += 1;
+    }
+    const std::uint32_t bodyCount = static_cast<std::uint32_t>(bodies_.moving.size());
+    bodies_.count = bodyCount;
+    const std::int32_t stillRow = static_cast<std::int32_t>(bodyCount);
+
+    // Every colour starts a fresh batch; the overflow colour comes last.
+    colors_.clear();
+    std::uint32_t colorFirstBatch[kMaxColors + 1] = {};
+    std::uint32_t batchCount = 0;
+    for (std::uint32_t c = 0; c <= kMaxColors; ++c) {
+        if (colorCounts[c] == 0) continue;
+        const std::uint32_t n = static_cast<std::uint32_t>((colorCounts[c] + kBatchLanes - 1) / kBatchLanes);
+        colorFirstBatch[c] = batchCount;
+        colors_.push_back({batchCount, n});
+        batchCount += n;
+    }
+    stats_ = {};
+    stats_.constraints = constraints;
+    stats_.colors = static_cast<std::uint32_t>(colors_.size());
+    stats_.batches = batchCount;
+    stats_.laneOccupancy =
+        batchCount ? static_cast<float>(constraints) / static_cast<float>(batchCount * kBatchLanes) : 0;
+    overflow_ = colorCounts[kOverflowColor] > 0;
+
+    manifoldOfLane_.assign(std::size_t{batchCount} * kBatchLanes, ~0u);
+    {
+        std::uint32_t filled[kMaxColors + 1] = {};
+        for (std::size_t k = 0; k < manifoldCount; ++k) {
+            const std::uint32_t c = colorOf_[k];
+            if (c == kNoColor) continue;
+            manifoldOfLane_[std::size_t{colorFirstBatch[c]} * kBatchLanes + filled[c]++] =
+                static_cast<std::uint32_t>(k);
+        }
+    }
+
+    // Body rows: the touched bodies, the still row, one scratch row per worker.
+    const std::size_t rows = bodyCount + 1 + static_cast<std::size_t>(scratchRows_);
+    for (auto* a : {&bodies_.vx, &bodies_.vy, &bodies_.vz, &bodies_.wx, &bodies_.wy, &bodies_.wz, &bodies_.dpx,
+                    &bodies_.dpy, &bodies_.dpz, &bodies_.dax, &bodies_.day, &bodies_.daz, &bodies_.pvx, &bodies_.pvy,
+                    &bodies_.pvz, &bodies_.pwx, &bodies_.pwy, &bodies_.pwz})
+        a->assign(rows, 0.0f);
+    for (auto* a : {&p0x_, &p0y_, &p0z_, &q0x_, &q0y_, &q0z_, &q0w_}) a->resize(bodyCount);
+    pool.forChunks(bodyCount, kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const std::uint32_t d = bodies_.moving[i];
+            p0x_[i] = m.px[d], p0y_[i] = m.py[d], p0z_[i] = m.pz[d];
+            q0x_[i] = m.qx[d], q0y_[i] = m.qy[d], q0z_[i] = m.qz[d], q0w_[i] = m.qw[d];
+        }
+    });
+
+    // Constraint rows, in parallel over batches.
+    batches_.resize(batchCount);
+    const float invH = 1.0f / h;
+    const float hertz = std::min(settings_.contactHertz, 0.25f * invH);
+    const Softness dynamicSoft = soft(hertz, settings_.contactDampingRatio, h);
+    const Softness staticSoft = soft(2.0f * hertz, settings_.contactDampingRatio, h);
+    const Softness stiff{settings_.baumgarte * invH, 1.0f, 0.0f};
+    const bool softStep = settings_.positionCorrection == PositionCorrection::SoftStep;
+    const float slop = settings_.linearSlop;
+    const bool warmStarting = settings_.warmStarting;
+    pool.forChunks(batchCount, kManifoldChunk / kBatchLanes, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t bi = begin; bi < end; ++bi) {
+            ContactBatch& b = batches_[bi];
+            std::memset(static_cast<void*>(&b), 0, sizeof b);
+            for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
+                b.bodyA[lane] = b.bodyB[lane] = stillRow;
+                const std::uint32_t k = manifoldOfLane_[bi * kBatchLanes + lane];
+                if (k == ~0u) continue;
+                const ContactPair& pair = contacts.pairs[k];
+                const Manifold& mf = contacts.manifolds[k];
+                // Side data: position, velocities, inverse mass and world inverse inertia.
+                struct Side {
+                    Vec3 p, v, w;
+                    float invMass = 0, friction = 0, restitution = 0;
+                    float inertia[6] = {};
+                    std::int32_t row = 0;
+                    bool dynamic = false;
+                };
+                const auto side = [&](std::uint32_t dense, bool isStatic) {
+                    Side sd;
+                    if (isStatic) {
+                        sd.p = {s.px[dense], s.py[dense], s.pz[dense]};
+                        sd.friction = s.friction[dense];
+                        sd.restitution = s.restitution[dense];
+                        sd.row = stillRow;
+                        return sd;
+                    }
+                    sd.p = {m.px[dense], m.py[dense], m.pz[dense]};
+                    sd.v = {m.vx[dense], m.vy[dense], m.vz[dense]};
+                    sd.w = {m.wx[dense], m.wy[dense], m.wz[dense]};
+                    sd.friction = m.friction[dense];
+                    sd.restitution = m.restitution[dense];
+                    sd.row = solverIndex_[dense];
+                    sd.dynamic = isDynamic(dense);
+                    if (sd.dynamic) {
+                        sd.invMass = m.invMass[dense];
+                        if (rotation_) {
+                            const float i6[6] = {m.iwXX[dense], m.iwYY[dense], m.iwZZ[dense],
+                                                 m.iwXY[dense], m.iwXZ[dense], m.iwYZ[dense]};
+                            std::copy(i6, i6 + 6, sd.inertia);
+                        }
+                    }
+                    return sd;
+                };
+                const Side A = side(pair.a, pair.aStatic), B = side(pair.b, pair.bStatic);
+                b.bodyA[lane] = A.row;
+                b.bodyB[lane] = B.row;
+                const Vec3 n = mf.normal;
+                Vec3 t1, t2;
+                tangentBasis(n, t1, t2);
+                b.nx[lane] = n.x, b.ny[lane] = n.y, b.nz[lane] = n.z;
+                b.t1x[lane] = t1.x, b.t1y[lane] = t1.y, b.t1z[lane] = t1.z;
+                b.t2x[lane] = t2.x, b.t2y[lane] = t2.y, b.t2z[lane] = t2.z;
+                b.invMassA[lane] = A.invMass;
+                b.invMassB[lane] = B.invMass;
+                b.iaXX[lane] = A.inertia[0], b.iaYY[lane] = A.inertia[1], b.iaZZ[lane] = A.inertia[2];
+                b.iaXY[lane] = A.inertia[3], b.iaXZ[lane] = A.inertia[4], b.iaYZ[lane] = A.inertia[5];
+                b.ibXX[lane] = B.inertia[0], b.ibYY[lane] = B.inertia[1], b.ibZZ[lane] = B.inertia[2];
+                b.ibXY[lane] = B.inertia[3], b.ibXZ[lane] = B.inertia[4], b.ibYZ[lane] = B.inertia[5];
+                // Geometric mean for friction (a frictionless surface is frictionless against anything), the
+                // larger restitution (a ball bounces off a floor that does not).
+                b.friction[lane] = friction_ ? std::sqrt(A.friction * B.friction) : 0.0f;
+                b.restitution[lane] = bounce ? std::max(A.restitution, B.restitution) : 0.0f;
+                const Softness sn = !softStep ? stiff : (A.dynamic && B.dynamic ? dynamicSoft : staticSoft);
+                b.biasRate[lane] = sn.biasRate;
+                b.massScale[lane] = sn.massScale;
+                b.impulseScale[lane] = sn.impulseScale;
+                b.slop[lane] = slop;
+                for (int i = 0; i < mf.pointCount; ++i) {
+                    const ContactPoint& cp = mf.points[i];
+                    ContactBatch::Point& pt = b.points[i];
+                    // The point lies on B's surface; A's anchor is the same world point.
+                    const Vec3 rA = cp.position - A.p, rB = cp.position - B.p;
+                    pt.rAx[lane] = rA.x, pt.rAy[lane] = rA.y, pt.rAz[lane] = rA.z;
+                    pt.rBx[lane] = rB.x, pt.rBy[lane] = rB.y, pt.rBz[lane] = rB.z;
+                    pt.separation[lane] = -cp.depth;
+                    const auto effective = [&](Vec3 dir) {
+                        const Vec3 ra = cross(rA, dir), rb = cross(rB, dir);
+                        const float sum = A.invMass + B.invMass + dot(ra, applyInertia(A.inertia, ra)) +
+                                          dot(rb, applyInertia(B.inertia, rb));
+                        return sum > 0 ? 1.0f / sum : 0.0f;
+                    };
+                    pt.normalMass[lane] = effective(n);
+                    pt.tangentMass1[lane] = friction_ ? effective(t1) : 0.0f;
+                    pt.tangentMass2[lane] = friction_ ? effective(t2) : 0.0f;
+                    const Vec3 dv = (B.v + cross(B.w, rB)) - (A.v + cross(A.w, rA));
+                    pt.relativeVelocity[lane] = dot(dv, n);
+                    if (warmStarting) {
+                        const PointImpulse& carried = warm[k * kMaxManifoldPoints + i];
+                        pt.normalImpulse[lane] = carried.normal;
+                        pt.tangentImpulse1[lane] = friction_ ? carried.tangent1 : 0.0f;
+                        pt.tangentImpulse2[lane] = friction_ ? carried.tangent2 : 0.0f;
+                    }
+                }
+            }
+        }
+    });
+}
+
+void ContactSolver::loadBodies(const MovingBodies& m, TaskPool& pool) {
+    SolverBodies& b = bodies_;
+    std::vector<std::uint8_t> movedInChunk(TaskPool::chunkCount(b.count, kBodyChunk), 0);
+    pool.forChunks(b.count, kBodyChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
+        bool moved = false;
+        for (std::size_t i = begin; i < end; ++i) {
+            const std::uint32_t d = b.moving[i];
+            b.vx[i] = m.vx[d], b.vy[i] = m.vy[d], b.vz[i] = m.vz[d];
+            b.wx[i] = m.wx[d], b.wy[i] = m.wy[d], b.wz[i] = m.wz[d];
+            b.dpx[i] = m.px[d] - p0x_[i], b.dpy[i] = m.py[d] - p0y_[i], b.dpz[i] = m.pz[d] - p0z_[i];
+            // q q0^-1 = (vector u, scalar c); the small rotation is 2u, on the short side of the double cover.
+            const Quat q{m.qx[d], m.qy[d], m.qz[d], m.qw[d]};
+            const Quat delta = q * conjugate(Quat{q0x_[i], q0y_[i], q0z_[i], q0w_[i]});
+            const float sign = delta.w < 0 ? -2.0f : 2.0f;
+            b.dax[i] = sign * delta.x, b.day[i] = sign * delta.y, b.daz[i] = sign * delta.z;
+            moved |= b.dpx[i] != 0 || b.dpy[i] != 0 || b.dpz[i] != 0 || b.dax[i] != 0 || b.day[i] != 0 || b.daz[i] != 0;
+        }
+        movedInChunk[chunk] = moved;
+    });
+    moved_ = std::find(movedInChunk.begin(), movedInChunk.end(), 1) != movedInChunk.end();
+}
+
+void ContactSolver::storeVelocities(MovingBodies& m, TaskPool& pool) const {
+    const SolverBodies& b = bodies_;
+    pool.forChunks(b.count, kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const std::uint32_t d = b.moving[i];
+            if ((m.flags[d] & (kFlagKinematic | kFlagFrozen)) != 0) continue;
+            m.vx[d] = b.vx[i], m.vy[d] = b.vy[i], m.vz[d] = b.vz[i];
+            m.wx[d] = b.wx[i], m.wy[d] = b.wy[i], m.wz[d] = b.wz[i];
+        }
+    });
+}
+
+template <class Kernel>
+void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel) {
+    SolverBodies& b = bodies_;
+    const auto rowsFor = [&](int worker) {
+        return BodyRows{b.vx.data(),
+                        b.vy.data(),
+                        b.vz.data(),
+                        b.wx.data(),
+                        b.wy.data(),
+                        b.wz.data(),
+                        b.dpx.data(),
+                        b.dpy.data(),
+                        b.dpz.data(),
+                        b.dax.data(),
+                        b.day.data(),
+                        b.daz.data(),
+                        b.pvx.data(),
+                        b.pvy.data(),
+                        b.pvz.data(),
+                        b.pwx.data(),
+                        b.pwy.data(),
+                        b.pwz.data(),
+                        static_cast<std::int32_t>(b.count + 1 + static_cast<std::uint32_t>(worker))};
+    };
+    const std::size_t colorCount = colors_.size() - (overflow_ ? 1 : 0);
+    for (std::size_t c = 0; c < colorCount; ++c) {
+        const ColorRange range = colors_[c];
+        pool.forChunks(range.batchCount, kBatchChunk, [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
+            const BodyRows rows = rowsFor(worker);
+            for (std::size_t i = begin; i < end; ++i)
+                kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows);
+        });
+    }
+    if (overflow_) {
+        // One thread, one lane at a time: these manifolds share bodies.
+        const ColorRange range = colors_.back();
+        const BodyRows rows = rowsFor(0);
+        for (std::size_t i = 0; i < range.batchCount; ++i)
+            for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
+                kernel.template operator()<float>(batches_[range.firstBatch + i], lane, rows);
+    }
+}
+
+void ContactSolver::warmStart(TaskPool& pool) {
+    forEachColor(pool, []<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
+        contact_kernels::warmStart<F>(b, lane, rows);
+    });
+}
+
+void ContactSolver::solveVelocities(bool useBias, TaskPool& pool) {
+    SolveParams params;
+    params.invH = 1.0f / h_;
+    params.maxPushOutVelocity = settings_.maxPushOutVelocity;
+    params.useBias = useBias && settings_.positionCorrection != PositionCorrection::SplitImpulse;
+    params.moved = moved_;
+    if (friction_)
+        forEachColor(pool, [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
+            contact_kernels::solve<F, true>(b, lane, rows, params);
+        });
+    else
+        forEachColor(pool, [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
+            contact_kernels::solve<F, false>(b, lane, rows, params);
+        });
+}
+
+void ContactSolver::solvePositions(TaskPool& pool) {
+    SolveParams params;
+    params.invH = 1.0f / h_;
+    params.maxPushOutVelocity = settings_.maxPushOutVelocity;
+    forEachColor(pool, [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
+        contact_kernels::solvePositions<F>(b, lane, rows, params);
+    });
+}
+
+void ContactSolver::applyPseudoVelocities(MovingBodies& m, TaskPool& pool) {
+    SolverBodies& b = bodies_;
+    const float h = h_;
+    pool.forChunks(b.count, kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const std::uint32_t d = b.moving[i];
+            if ((m.flags[d] & (kFlagKinematic | kFlagFrozen)) == 0) {
+                m.px[d] += b.pvx[i] * h, m.py[d] += b.pvy[i] * h, m.pz[d] += b.pvz[i] * h;
+                const Vec3 w{b.pwx[i] * h, b.pwy[i] * h, b.pwz[i] * h};
+                if (w != Vec3{}) {
+                    const Quat q{m.qx[d], m.qy[d], m.qz[d], m.qw[d]};
+                    const Quat dq = Quat{w.x * 0.5f, w.y * 0.5f, w.z * 0.5f, 0.0f} * q;
+                    Quat r{q.x + dq.x, q.y + dq.y, q.z + dq.z, q.w + dq.w};
+                    const float len = std::sqrt(r.x * r.x + r.y * r.y + r.z * r.z + r.w * r.w);
+                    m.qx[d] = r.x / len, m.qy[d] = r.y / len, m.qz[d] = r.z / len, m.qw[d] = r.w / len;
+                }
+            }
+            b.pvx[i] = b.pvy[i] = b.pvz[i] = b.pwx[i] = b.pwy[i] = b.pwz[i] = 0.0f;
+        }
+    });
+    for (std::size_t i = b.count; i < b.pvx.size(); ++i)
+        b.pvx[i] = b.pvy[i] = b.pvz[i] = b.pwx[i] = b.pwy[i] = b.pwz[i] = 0.0f;
+    // The pseudo impulses start again from zero in the next substep.
+    for (ContactBatch& batch : batches_)
+        for (ContactBatch::Point& p : batch.points)
+            std::fill(std::begin(p.pseudoImpulse), std::end(p.pseudoImpulse), 0.0f);
+}
+
+void ContactSolver::applyRestitution(TaskPool& pool) {
+    const float threshold = settings_.restitutionThreshold;
+    forEachColor(pool, [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
+        contact_kernels::restitution<F>(b, lane, rows, threshold);
+    });
+}
+
+void ContactSolver::storeImpulses(std::vector<PointImpulse>& impulses) const {
+    std::fill(impulses.begin(), impulses.end(), PointImpulse{});
+    for (std::size_t bi = 0; bi < batches_.size(); ++bi) {
+        const ContactBatch& b = batches_[bi];
+        for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
+            const std::uint32_t k = manifoldOfLane_[bi * kBatchLanes + lane];
+            if (k == ~0u) continue;
+            for (int i = 0; i < kMaxManifoldPoints; ++i) {
+                const ContactBatch::Point& p = b.points[i];
+                impulses[k * kMaxManifoldPoints + i] = {p.normalImpulse[lane], p.tangentImpulse1[lane],
+                                                        p.tangentImpulse2[lane]};
+            }
+        }
+    }
+}
+
+}  // namespace rubble::detail

@@ -1,0 +1,107 @@
+#pragma once
+// The contact solver: sequential impulses over this step's manifolds, with friction in the Coulomb cone,
+// restitution above a speed threshold, warm starting from the contact cache, and position correction by soft step,
+// Baumgarte or split impulses (rubble::PositionCorrection).
+//
+// Parallel and SIMD through graph colouring: manifolds are coloured so that no dynamic body appears twice in a
+// colour; each colour is cut into batches of simd::kLanes manifolds solved together in SIMD lanes, and the batches
+// of one colour are independent, so they run on any thread in any order with the same result. Colours run in a
+// fixed order, so the state after the solve does not depend on the thread count.
+#include <cstdint>
+#include <vector>
+
+#include "aligned_vector.h"
+#include "body_storage.h"
+#include "contacts.h"
+#include "narrowphase/narrowphase_stage.h"
+#include "rubble/settings.h"
+#include "solver/contact_batch.h"
+
+namespace rubble::detail {
+
+class TaskPool;
+
+/// The solver's view of the bodies in contact: velocities and the motion since prepare(), by solver index.
+/// Rows [0, count) are the moving bodies the constraints touch, row `count` is the still body that stands for
+/// every static body (always zero), and the rows after it are per-worker scratch rows that absorb the writes aimed
+/// at bodies that cannot move (static and kinematic), so that no two threads ever write the same row.
+struct SolverBodies {
+    AlignedVector<float> vx, vy, vz, wx, wy, wz;
+    AlignedVector<float> dpx, dpy, dpz;                 ///< displacement of the centre of mass since prepare()
+    AlignedVector<float> dax, day, daz;                 ///< rotation since prepare() as a small-angle vector
+    AlignedVector<float> pvx, pvy, pvz, pwx, pwy, pwz;  ///< split impulses' pseudo-velocities
+    std::vector<std::uint32_t> moving;                  ///< solver index -> dense index of the moving body
+    std::uint32_t count = 0;
+};
+
+struct ContactSolverStats {
+    std::uint32_t constraints = 0;  ///< manifolds with at least one dynamic body
+    std::uint32_t colors = 0;
+    std::uint32_t batches = 0;
+    /// Lanes filled over lanes used, in [0, 1]: how well colouring packs the SIMD batches.
+    float laneOccupancy = 0;
+};
+
+class ContactSolver {
+public:
+    /// Builds the constraints for this step's manifolds, starting from `warm` (kMaxManifoldPoints per manifold, as
+    /// ContactCache::warmStart gives them). `h` is the substep the solve runs at.
+    void prepare(const Contacts& contacts, const std::vector<PointImpulse>& warm, const BodyStorage& storage,
+                 const WorldSettings& settings, EffectSet effects, float h, TaskPool& pool);
+    bool empty() const { return stats_.constraints == 0; }
+
+    /// Copies the touched bodies' velocities in and measures their motion since prepare(). Call at the start of a
+    /// substep and after integrate positions (before relaxing).
+    void loadBodies(const MovingBodies& bodies, TaskPool& pool);
+    /// Copies the solved velocities back (dynamic bodies only).
+    void storeVelocities(MovingBodies& bodies, TaskPool& pool) const;
+
+    /// Applies the accumulated impulses (every substep; soft step and split impulses carry them through).
+    void warmStart(TaskPool& pool);
+    /// One velocity iteration. With bias, overlap is corrected by the chosen position correction; without, only
+    /// speculative gaps are respected (the relax iterations of the soft step, and split impulses' velocity pass).
+    void solveVelocities(bool useBias, TaskPool& pool);
+    /// Split impulses: one iteration on the pseudo-velocities.
+    void solvePositions(TaskPool& pool);
+    /// Split impulses: moves the bodies by their pseudo-velocities over the substep and clears them.
+    void applyPseudoVelocities(MovingBodies& bodies, TaskPool& pool);
+    /// Bounces: approach speeds above the threshold are reversed by the restitution coefficient.
+    void applyRestitution(TaskPool& pool);
+    /// The final accumulated impulses, in manifold order, for the contact cache.
+    void storeImpulses(std::vector<PointImpulse>& impulses) const;
+
+    const ContactSolverStats& stats() const { return stats_; }
+    struct ColorRange {
+        std::uint32_t firstBatch = 0;
+        std::uint32_t batchCount = 0;
+    };
+    /// Prepared batches and the colour ranges (the overflow range last, when there is one), for tests.
+    const std::vector<ContactBatch>& batches() const { return batches_; }
+    const std::vector<ColorRange>& colorRanges() const { return colors_; }
+    bool hasOverflow() const { return overflow_; }
+
+private:
+    template <class Kernel>
+    void forEachColor(TaskPool& pool, Kernel&& kernel);
+
+    SolverSettings settings_;
+    float h_ = 0;
+    bool friction_ = true;
+    bool rotation_ = true;
+    int scratchRows_ = 1;
+    bool overflow_ = false;
+    bool moved_ = false;  ///< some body moved since prepare(): separations must follow the motion rows  ///< the last
+                          ///< colour range holds manifolds that found no free colour
+    ContactSolverStats stats_;
+    SolverBodies bodies_;
+    std::vector<ContactBatch> batches_;
+    std::vector<ColorRange> colors_;
+    std::vector<std::uint32_t> manifoldOfLane_;  ///< batch * kLanes + lane -> manifold, ~0u for an empty lane
+    // Prepare scratch.
+    std::vector<std::int32_t> solverIndex_;  ///< dense index of a moving body -> solver index, -1 if untouched
+    std::vector<std::uint64_t> bodyColors_;  ///< per solver index: colours that already hold the body
+    std::vector<std::uint32_t> colorOf_;
+    AlignedVector<float> p0x_, p0y_, p0z_, q0x_, q0y_, q0z_, q0w_;  ///< pose at prepare(), by solver index
+};
+
+}  // namespace rubble::detail

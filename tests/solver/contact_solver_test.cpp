@@ -1,0 +1,216 @@
+// The contact solver's parallel structure: colouring keeps every dynamic body to one lane per colour, the wide
+// kernels agree bit for bit with the one-lane (scalar) kernels, and the state after a step does not depend on the
+// thread count.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <random>
+#include <set>
+
+#include "parallel.h"
+#include "rubble/world.h"
+#include "solver/contact_batch.h"
+#include "solver/contact_solver.h"
+#include "support/contact_batches.h"
+
+namespace rubble {
+namespace {
+
+using detail::BodyRows;
+using detail::ContactBatch;
+using detail::kBatchLanes;
+
+/// A pyramid of `layers` layers of 1 m cubes on a ground box, as in SCENES.md S1.
+void buildPyramid(World& world, int layers) {
+    BodyDef ground;
+    ground.type = BodyType::Static;
+    ground.shape = world.createShape(BoxDef{{100, 0.5f, 100}});
+    ground.position = {0, -0.5f, 0};
+    world.createBody(ground);
+    BodyDef cube;
+    cube.shape = world.createShape(BoxDef{{0.5f, 0.5f, 0.5f}});
+    for (int k = 0; k < layers; ++k) {
+        const int n = layers - k;
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j) {
+                cube.position = {(i - (n - 1) / 2.0f), 0.5f + k, (j - (n - 1) / 2.0f)};
+                world.createBody(cube);
+            }
+    }
+}
+
+std::uint64_t pyramidHash(int threads, PositionCorrection correction) {
+    WorldSettings s;
+    s.threads = threads;
+    s.solver.positionCorrection = correction;
+    World world(s);
+    buildPyramid(world, 8);
+    // Knock it so that the solve is not symmetric and colours really interleave.
+    world.applyLinearImpulse(world.bodies().back(), {800, 0, 300});
+    for (int i = 0; i < 40; ++i) world.step(1.0f / 60.0f);
+    return world.stateHash();
+}
+
+TEST(ContactSolver, StateDoesNotDependOnThreadCount) {
+    for (const PositionCorrection c :
+         {PositionCorrection::SoftStep, PositionCorrection::Baumgarte, PositionCorrection::SplitImpulse}) {
+        const std::uint64_t one = pyramidHash(1, c);
+        EXPECT_EQ(one, pyramidHash(2, c)) << positionCorrectionName(c);
+        EXPECT_EQ(one, pyramidHash(3, c)) << positionCorrectionName(c);
+    }
+}
+
+TEST(ContactSolver, PyramidColoursFillTheLanes) {
+    WorldSettings s;
+    s.threads = 1;
+    World world(s);
+    buildPyramid(world, 8);
+    world.step(1.0f / 60.0f);
+    const Profile& profile = world.lastProfile();
+    EXPECT_GT(profile.constraints, 500u);
+    EXPECT_GE(profile.colors, 4u);  // a box touches up to 8 others plus the ground: at least that many colours
+    EXPECT_LE(profile.colors, 63u);
+    EXPECT_GT(profile.laneOccupancy, 0.5f);
+}
+
+// Random contact graphs, dense enough to need the overflow set: within a colour no dynamic body appears twice
+// (checked by brute force over the prepared batches), and every manifold with a dynamic body is in exactly one lane.
+TEST(ContactSolver, ColoursNeverHoldADynamicBodyTwice) {
+    std::mt19937 rng(7);
+    for (const int bodies : {40, 400}) {
+        detail::BodyStorage storage;
+        for (int i = 0; i < bodies; ++i) {
+            std::uint32_t dense = 0;
+            storage.allocate(detail::BodySet::Moving, dense);
+            storage.moving.invMass[dense] = 1.0f;
+            storage.moving.qw[dense] = 1.0f;
+            storage.moving.friction[dense] = 0.5f;
+            // Every fifth body is kinematic: it may appear in any number of lanes of a colour.
+            if (i % 5 == 4) storage.moving.flags[dense] = detail::kFlagKinematic, storage.moving.invMass[dense] = 0;
+        }
+        std::uint32_t ground = 0;
+        storage.allocate(detail::BodySet::Static, ground);
+        detail::Contacts contacts;
+        std::uniform_int_distribution<int> pick(0, bodies - 1);
+        const int manifolds = bodies * 40;
+        for (int k = 0; k < manifolds; ++k) {
+            detail::ContactPair pair;
+            pair.a = static_cast<std::uint32_t>(pick(rng));
+            if (k % 7 == 0) {
+                pair.b = ground, pair.bStatic = true;
+            } else {
+                pair.b = static_cast<std::uint32_t>(pick(rng));
+                if (pair.b == pair.a) continue;
+            }
+            detail::Manifold m;
+            m.normal = {0, 1, 0};
+            m.pointCount = 1;
+            m.points[0].depth = 0.01f;
+            contacts.pairs.push_back(pair);
+            contacts.manifolds.push_back(m);
+        }
+        const std::vector<detail::PointImpulse> warm(contacts.manifolds.size() * detail::kMaxManifoldPoints);
+        detail::TaskPool pool(2);
+        detail::ContactSolver solver;
+        solver.prepare(contacts, warm, storage, WorldSettings{}, EffectSet::defaults(), 1.0f / 60.0f, pool);
+        const auto& ranges = solver.colorRanges();
+        std::size_t lanes = 0;
+        for (std::size_t c = 0; c < ranges.size(); ++c) {
+            const bool overflow = solver.hasOverflow() && c + 1 == ranges.size();
+            std::set<std::int32_t> seen;
+            for (std::uint32_t bi = ranges[c].firstBatch; bi < ranges[c].firstBatch + ranges[c].batchCount; ++bi) {
+                const ContactBatch& b = solver.batches()[bi];
+                for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
+                    if (b.invMassA[lane] == 0 && b.invMassB[lane] == 0) continue;
+                    ++lanes;
+                    if (overflow) continue;  // solved one lane at a time, so sharing is allowed
+                    if (b.invMassA[lane] > 0) {
+                        EXPECT_TRUE(seen.insert(b.bodyA[lane]).second) << "colour " << c;
+                    }
+                    if (b.invMassB[lane] > 0) {
+                        EXPECT_TRUE(seen.insert(b.bodyB[lane]).second) << "colour " << c;
+                    }
+                }
+            }
+        }
+        std::size_t expected = 0;
+        for (const detail::ContactPair& p : contacts.pairs)
+            expected += (storage.moving.invMass[p.a] > 0 || (!p.bStatic && storage.moving.invMass[p.b] > 0)) ? 1 : 0;
+        EXPECT_EQ(lanes, expected);
+        EXPECT_EQ(solver.stats().constraints, expected);
+        if (bodies == 40) {
+            EXPECT_TRUE(solver.hasOverflow()) << "40 bodies with ~70 neighbours each need > 63 colours";
+        }
+    }
+}
+
+struct Rows {
+    std::vector<float> data[18];
+    explicit Rows(std::size_t n, std::mt19937& rng) {
+        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+        for (auto& d : data) {
+            d.resize(n);
+            for (float& x : d) x = u(rng);
+        }
+        for (auto& d : data) d[n - 2] = 0.0f;  // the still row
+    }
+    BodyRows rows() {
+        return {data[0].data(),
+                data[1].data(),
+                data[2].data(),
+                data[3].data(),
+                data[4].data(),
+                data[5].data(),
+                data[6].data(),
+                data[7].data(),
+                data[8].data(),
+                data[9].data(),
+                data[10].data(),
+                data[11].data(),
+                data[12].data(),
+                data[13].data(),
+                data[14].data(),
+                data[15].data(),
+                data[16].data(),
+                data[17].data(),
+                static_cast<std::int32_t>(data[0].size() - 1)};
+    }
+};
+
+TEST(ContactSolver, WideKernelsAgreeWithScalarKernelsBitForBit) {
+    std::mt19937 rng(42);
+    const std::int32_t bodies = 2 * static_cast<std::int32_t>(kBatchLanes);
+    for (int trial = 0; trial < 20; ++trial) {
+        ContactBatch wide;
+        test::fillRandomBatch(wide, rng, bodies);
+        ContactBatch scalar = wide;
+        std::mt19937 rowRng(trial);
+        Rows wideRows(bodies + 2, rowRng);
+        Rows scalarRows = wideRows;
+        detail::SolveParams params;
+        params.invH = 240.0f;
+        params.useBias = trial % 2 == 0;
+        BodyRows w = wideRows.rows(), s = scalarRows.rows();
+        detail::contact_kernels::warmStart<simd::FloatW>(wide, 0, w);
+        detail::contact_kernels::solve<simd::FloatW, true>(wide, 0, w, params);
+        detail::contact_kernels::solvePositions<simd::FloatW>(wide, 0, w, params);
+        detail::contact_kernels::restitution<simd::FloatW>(wide, 0, w, 1.0f);
+        for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
+            detail::contact_kernels::warmStart<float>(scalar, lane, s);
+        for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
+            detail::contact_kernels::solve<float, true>(scalar, lane, s, params);
+        for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
+            detail::contact_kernels::solvePositions<float>(scalar, lane, s, params);
+        for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
+            detail::contact_kernels::restitution<float>(scalar, lane, s, 1.0f);
+        // Every row but the scratch row (which absorbs writes for the still body in any order) must match.
+        for (int a = 0; a < 18; ++a)
+            for (std::int32_t r = 0; r <= bodies; ++r)
+                ASSERT_EQ(wideRows.data[a][r], scalarRows.data[a][r]) << "array " << a << " row " << r;
+        ASSERT_EQ(std::memcmp(&wide, &scalar, sizeof wide), 0) << "trial " << trial;
+    }
+}
+
+}  // namespace
+}  // namespace rubble

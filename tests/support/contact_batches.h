@@ -1,0 +1,52 @@
+#pragma once
+// Random but physically well-formed contact batches, for the solver kernels' agreement test and benchmark.
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include "solver/contact_batch.h"
+
+namespace rubble::test {
+
+using detail::ContactBatch;
+using detail::kBatchLanes;
+
+/// Random but well-formed constraint rows: unit normal and basis, positive masses, a few overlapping points.
+/// Lanes use bodies firstBody + 2 lane and firstBody + 2 lane + 1; the last lane meets the still row `still`.
+inline void fillRandomBatch(detail::ContactBatch& b, std::mt19937& rng, std::int32_t still,
+                            std::int32_t firstBody = 0) {
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f), pos(0.1f, 1.0f);
+    std::memset(static_cast<void*>(&b), 0, sizeof b);
+    for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
+        // Distinct bodies per lane (as colouring guarantees); the last lane meets the still row.
+        b.bodyA[lane] = firstBody + static_cast<std::int32_t>(2 * lane);
+        b.bodyB[lane] = lane + 1 == kBatchLanes ? still : firstBody + static_cast<std::int32_t>(2 * lane + 1);
+        Vec3 n{u(rng), u(rng), u(rng)};
+        n = n * (1.0f / length(n));
+        Vec3 t1 = cross(std::fabs(n.x) < 0.5f ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, n);
+        t1 = t1 * (1.0f / length(t1));
+        const Vec3 t2 = cross(n, t1);
+        b.nx[lane] = n.x, b.ny[lane] = n.y, b.nz[lane] = n.z;
+        b.t1x[lane] = t1.x, b.t1y[lane] = t1.y, b.t1z[lane] = t1.z;
+        b.t2x[lane] = t2.x, b.t2y[lane] = t2.y, b.t2z[lane] = t2.z;
+        b.invMassA[lane] = pos(rng);
+        b.invMassB[lane] = lane + 1 == kBatchLanes ? 0.0f : pos(rng);
+        b.iaXX[lane] = pos(rng), b.iaYY[lane] = pos(rng), b.iaZZ[lane] = pos(rng);
+        b.ibXX[lane] = pos(rng), b.ibYY[lane] = pos(rng), b.ibZZ[lane] = pos(rng);
+        b.iaXY[lane] = 0.1f * u(rng), b.ibXZ[lane] = 0.1f * u(rng);
+        b.friction[lane] = 0.6f;
+        b.restitution[lane] = 0.5f;
+        b.biasRate[lane] = 12.0f, b.massScale[lane] = 0.9f, b.impulseScale[lane] = 0.1f, b.slop[lane] = 0.005f;
+        for (int i = 0; i < 3; ++i) {
+            ContactBatch::Point& p = b.points[i];
+            p.rAx[lane] = u(rng), p.rAy[lane] = u(rng), p.rAz[lane] = u(rng);
+            p.rBx[lane] = u(rng), p.rBy[lane] = u(rng), p.rBz[lane] = u(rng);
+            p.separation[lane] = 0.02f * u(rng);
+            p.normalMass[lane] = pos(rng), p.tangentMass1[lane] = pos(rng), p.tangentMass2[lane] = pos(rng);
+            p.normalImpulse[lane] = pos(rng), p.tangentImpulse1[lane] = 0.3f * u(rng);
+            p.relativeVelocity[lane] = -3.0f * pos(rng), p.maxNormalImpulse[lane] = pos(rng);
+        }
+    }
+}
+
+}  // namespace rubble::test
