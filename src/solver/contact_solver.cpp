@@ -44,18 +44,14 @@ struct Softness {
 
 /// A spring-damper contact solved implicitly over the substep h (the soft step's contact): the bias rate,
 /// and how much of the rigid response and of the accumulated impulse each iteration uses.
+simd::Vec3W<float> toWide(Vec3 v) { return {v.x, v.y, v.z}; }
+
 Softness soft(float hertz, float dampingRatio, float h) {
     const float omega = 2.0f * 3.14159265358979f * hertz;
     const float a1 = 2.0f * dampingRatio + h * omega;
     const float a2 = h * omega * a1;
     const float a3 = 1.0f / (1.0f + a2);
     return {omega / a1, a2 * a3, a3};
-}
-
-Vec3 applyInertia(const float* i, Vec3 v) {
-    // xx, yy, zz, xy, xz, yz
-    return {i[0] * v.x + i[3] * v.y + i[4] * v.z, i[3] * v.x + i[1] * v.y + i[5] * v.z,
-            i[4] * v.x + i[5] * v.y + i[2] * v.z};
 }
 
 }  // namespace
@@ -188,7 +184,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
                 struct Side {
                     Vec3 p, v, w;
                     float invMass = 0, friction = 0, restitution = 0;
-                    float inertia[6] = {};
+                    simd::SymMat3W<float> inertia{0, 0, 0, 0, 0, 0};
                     std::int32_t row = 0;
                     bool dynamic = false;
                 };
@@ -210,11 +206,10 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
                     sd.dynamic = isDynamic(dense);
                     if (sd.dynamic) {
                         sd.invMass = m.invMass[dense];
-                        if (rotation_) {
-                            const float i6[6] = {m.iwXX[dense], m.iwYY[dense], m.iwZZ[dense],
-                                                 m.iwXY[dense], m.iwXZ[dense], m.iwYZ[dense]};
-                            std::copy(i6, i6 + 6, sd.inertia);
-                        }
+                        if (rotation_)
+                            sd.inertia =
+                                simd::SymMat3W<float>::load(m.iwXX.data(), m.iwYY.data(), m.iwZZ.data(), m.iwXY.data(),
+                                                            m.iwXZ.data(), m.iwYZ.data(), dense);
                     }
                     return sd;
                 };
@@ -229,10 +224,8 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
                 b.t2x[lane] = t2.x, b.t2y[lane] = t2.y, b.t2z[lane] = t2.z;
                 b.invMassA[lane] = A.invMass;
                 b.invMassB[lane] = B.invMass;
-                b.iaXX[lane] = A.inertia[0], b.iaYY[lane] = A.inertia[1], b.iaZZ[lane] = A.inertia[2];
-                b.iaXY[lane] = A.inertia[3], b.iaXZ[lane] = A.inertia[4], b.iaYZ[lane] = A.inertia[5];
-                b.ibXX[lane] = B.inertia[0], b.ibYY[lane] = B.inertia[1], b.ibZZ[lane] = B.inertia[2];
-                b.ibXY[lane] = B.inertia[3], b.ibXZ[lane] = B.inertia[4], b.ibYZ[lane] = B.inertia[5];
+                A.inertia.store(b.iaXX, b.iaYY, b.iaZZ, b.iaXY, b.iaXZ, b.iaYZ, lane);
+                B.inertia.store(b.ibXX, b.ibYY, b.ibZZ, b.ibXY, b.ibXZ, b.ibYZ, lane);
                 // Geometric mean for friction (a frictionless surface is frictionless against anything), the
                 // larger restitution (a ball bounces off a floor that does not).
                 b.friction[lane] = friction_ ? std::sqrt(A.friction * B.friction) : 0.0f;
@@ -251,9 +244,9 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
                     pt.rBx[lane] = rB.x, pt.rBy[lane] = rB.y, pt.rBz[lane] = rB.z;
                     pt.separation[lane] = -cp.depth;
                     const auto effective = [&](Vec3 dir) {
-                        const Vec3 ra = cross(rA, dir), rb = cross(rB, dir);
-                        const float sum = A.invMass + B.invMass + dot(ra, applyInertia(A.inertia, ra)) +
-                                          dot(rb, applyInertia(B.inertia, rb));
+                        const simd::Vec3W<float> ra = toWide(cross(rA, dir)), rb = toWide(cross(rB, dir));
+                        const float sum =
+                            A.invMass + B.invMass + simd::dot(ra, A.inertia * ra) + simd::dot(rb, B.inertia * rb);
                         return sum > 0 ? 1.0f / sum : 0.0f;
                     };
                     pt.normalMass[lane] = effective(n);
@@ -275,7 +268,8 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
 
 void ContactSolver::loadBodies(const MovingBodies& m, TaskPool& pool) {
     SolverBodies& b = bodies_;
-    std::vector<std::uint8_t> movedInChunk(TaskPool::chunkCount(b.count, kBodyChunk), 0);
+    std::vector<std::uint8_t>& movedInChunk = movedInChunk_;
+    movedInChunk.assign(TaskPool::chunkCount(b.count, kBodyChunk), 0);
     pool.forChunks(b.count, kBodyChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
         bool moved = false;
         for (std::size_t i = begin; i < end; ++i) {

@@ -101,6 +101,7 @@ private:
     std::vector<std::int32_t> solverIndex_;  ///< dense index of a moving body -> solver index, -1 if untouched
     std::vector<std::uint64_t> bodyColors_;  ///< per solver index: colours that already hold the body
     std::vector<std::uint32_t> colorOf_;
+    std::vector<std::uint8_t> movedInChunk_;  ///< loadBodies: whether a chunk of bodies moved since prepare()
     AlignedVector<float> p0x_, p0y_, p0z_, q0x_, q0y_, q0z_, q0w_;  ///< pose at prepare(), by solver index
 };
 
