@@ -1,4 +1,5 @@
-// Box-box contact kernel (collideBoxes) on one core. items_per_second counts manifolds (pairs processed).
+// Box-box contact kernel on one core, per pair (collideBoxes), batched with the axis tests in SIMD lanes
+// (collideBoxesBatch) and the batched driver's scalar reference. items_per_second counts manifolds (pairs processed).
 // Pose sets: resting (cubes and planks lying on a ground box, slightly rotated and sunk: 4-point face contacts),
 // random (random sizes, rotations and overlapping offsets: face and edge contacts), and a 50/50 mix of the two.
 #include <benchmark/benchmark.h>
@@ -60,16 +61,54 @@ std::vector<BoxPair> makePairs(int restingPercent) {
     return pairs;
 }
 
+/// The pairs in the batched kernel's SoA form (margin 0.02 m for every pair).
+struct BoxPairArrays {
+    std::vector<float> soa[21];
+    explicit BoxPairArrays(const std::vector<BoxPair>& pairs) {
+        for (const BoxPair& p : pairs) {
+            const float values[21] = {p.a.position.x, p.a.position.y, p.a.position.z, p.a.rotation.x, p.a.rotation.y,
+                                      p.a.rotation.z, p.a.rotation.w, p.halfA.x,      p.halfA.y,      p.halfA.z,
+                                      p.b.position.x, p.b.position.y, p.b.position.z, p.b.rotation.x, p.b.rotation.y,
+                                      p.b.rotation.z, p.b.rotation.w, p.halfB.x,      p.halfB.y,      p.halfB.z,
+                                      0.02f};
+            for (int f = 0; f < 21; ++f) soa[f].push_back(values[f]);
+        }
+    }
+    BoxPairs view() const {
+        return {soa[0].data(),  soa[1].data(),  soa[2].data(),  soa[3].data(),  soa[4].data(),  soa[5].data(),
+                soa[6].data(),  soa[7].data(),  soa[8].data(),  soa[9].data(),  soa[10].data(), soa[11].data(),
+                soa[12].data(), soa[13].data(), soa[14].data(), soa[15].data(), soa[16].data(), soa[17].data(),
+                soa[18].data(), soa[19].data(), soa[20].data()};
+    }
+};
+
+/// state.range(0): 0 = per pair (collideBoxes into one manifold), 1 = batched SIMD axis tests
+/// (collideBoxesBatch), 2 = the batched driver's scalar reference (collideBoxesBatchScalar); 1 and 2 write an array
+/// of manifolds.
 void collide(benchmark::State& state, int restingPercent) {
     const std::vector<BoxPair> pairs = makePairs(restingPercent);
+    const BoxPairArrays arrays(pairs);
+    const BoxPairs in = arrays.view();
+    std::vector<Manifold> out(pairs.size());
     Manifold m;
     std::size_t points = 0;
+    const auto mode = state.range(0);
     for (auto _ : state) {
-        for (const BoxPair& p : pairs) {
-            collideBoxes(p.a, p.halfA, p.b, p.halfB, 0.02f, m);
-            points += static_cast<std::size_t>(m.pointCount);
-            benchmark::DoNotOptimize(m);
+        if (mode == 0) {
+            for (const BoxPair& p : pairs) {
+                collideBoxes(p.a, p.halfA, p.b, p.halfB, 0.02f, m);
+                points += static_cast<std::size_t>(m.pointCount);
+                benchmark::DoNotOptimize(m);
+            }
+            continue;
         }
+        if (mode == 1)
+            collideBoxesBatch(in, pairs.size(), out.data());
+        else
+            collideBoxesBatchScalar(in, pairs.size(), out.data());
+        for (const Manifold& k : out) points += static_cast<std::size_t>(k.pointCount);
+        benchmark::DoNotOptimize(out.data());
+        benchmark::ClobberMemory();
     }
     state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(pairs.size()));
     state.counters["points_per_manifold"] =
@@ -80,8 +119,8 @@ void BM_BoxBoxResting(benchmark::State& state) { collide(state, 100); }
 void BM_BoxBoxRandom(benchmark::State& state) { collide(state, 0); }
 void BM_BoxBoxMixed(benchmark::State& state) { collide(state, 50); }
 
-BENCHMARK(BM_BoxBoxResting);
-BENCHMARK(BM_BoxBoxRandom);
-BENCHMARK(BM_BoxBoxMixed);
+BENCHMARK(BM_BoxBoxResting)->Arg(0)->Arg(2)->Arg(1)->ArgName("mode");
+BENCHMARK(BM_BoxBoxRandom)->Arg(0)->Arg(2)->Arg(1)->ArgName("mode");
+BENCHMARK(BM_BoxBoxMixed)->Arg(0)->Arg(2)->Arg(1)->ArgName("mode");
 
 }  // namespace

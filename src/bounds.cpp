@@ -57,12 +57,16 @@ void boundsKernel(const MovingBodies& b, const ShapeBoundsTable& s, const Bounds
     const Vec3W<F> half{simd::gather(s.halfX.data(), shape), simd::gather(s.halfY.data(), shape),
                         simd::gather(s.halfZ.data(), shape)};
     const F radius = simd::gather(s.radius.data(), shape);
+    const F reach = simd::gather(s.reach.data(), shape);
 
     const Vec3W<F> com = Vec3W<F>::load(b.px.data(), b.py.data(), b.pz.data(), i);
     const simd::QuatW<F> q = simd::QuatW<F>::load(b.qx.data(), b.qy.data(), b.qz.data(), b.qw.data(), i);
     const simd::Mat3W<F> r = simd::rotationMatrix(q);
     const Vec3W<F> center = r * localCenter + com;
-    const F margin(params.margin);
+    // A turn by |w| dt moves a point at distance `reach` from the centre of mass by at most |w| dt reach (and never
+    // by more than the diameter of its circle).
+    const Vec3W<F> w = Vec3W<F>::load(b.wx.data(), b.wy.data(), b.wz.data(), i);
+    const F margin = F(params.margin) + simd::min(simd::length(w) * F(params.dt), F(2.0f)) * reach;
     Vec3W<F> extent;
     extent.x = simd::min(simd::abs(r.m[0][0]) * half.x + simd::abs(r.m[0][1]) * half.y + simd::abs(r.m[0][2]) * half.z,
                          radius) +
@@ -106,15 +110,38 @@ ShapeBoundsInfo shapeBoundsInfo(const Shape& shape) {
     }
     // Rounding in the kernel's rotation must not shrink a box below the shape: pad by a few ulps of the size.
     const float pad = 4e-7f * (length(half) + length(relative));
-    return {relative.x, relative.y, relative.z, half.x + pad, half.y + pad, half.z + pad, radius + pad};
+    return {relative.x,   relative.y,   relative.z,   half.x + pad,
+            half.y + pad, half.z + pad, radius + pad, rotationReach(shape)};
+}
+
+float rotationReach(const Shape& shape) {
+    const Vec3 com = shape.unitMass.centerOfMass;
+    switch (shape.kind) {
+        case ShapeKind::Sphere:
+            return length(com);
+        case ShapeKind::Capsule:
+            return length(com) + shape.halfHeight;
+        case ShapeKind::Box:
+            return length(com) + length(shape.halfExtents);
+        case ShapeKind::ConvexHull:
+        case ShapeKind::Compound: {
+            const Aabb& box = shape.localBounds;
+            return length((box.min + box.max) * 0.5f - com) + length((box.max - box.min) * 0.5f);
+        }
+        case ShapeKind::TriangleMesh:
+        case ShapeKind::Heightfield:
+            break;
+    }
+    return 0.0f;
 }
 
 void ShapeBoundsTable::set(std::uint32_t shape, const ShapeBoundsInfo& info) {
     if (shape >= centerX.size())
-        for (auto* a : {&centerX, &centerY, &centerZ, &halfX, &halfY, &halfZ, &radius}) a->resize(shape + 1);
+        for (auto* a : {&centerX, &centerY, &centerZ, &halfX, &halfY, &halfZ, &radius, &reach}) a->resize(shape + 1);
     centerX[shape] = info.centerX, centerY[shape] = info.centerY, centerZ[shape] = info.centerZ;
     halfX[shape] = info.halfX, halfY[shape] = info.halfY, halfZ[shape] = info.halfZ;
     radius[shape] = info.radius;
+    reach[shape] = info.reach;
 }
 
 void updateBounds(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,

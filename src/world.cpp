@@ -554,11 +554,10 @@ void World::step(float dt) {
             profile.meshTriangles = static_cast<std::uint32_t>(w.pairs.meshTriangles.size());
             {
                 detail::StageTimer timer(profile, Stage::NarrowPhase, w.origin);
-                w.narrowPhase.run(w.pairs, w.bodies, w.shapes, w.settings.contactMargin, *w.pool, w.contacts);
+                w.narrowPhase.run(w.pairs, w.bodies, w.shapes, {w.settings.contactMargin, dt}, *w.pool, w.contacts);
             }
             profile.manifolds = static_cast<std::uint32_t>(w.contacts.manifolds.size());
             profile.contactPoints = w.contacts.pointCount;
-            profile.unsupportedPairs = w.contacts.unsupportedPairs;
             {
                 detail::StageTimer timer(profile, Stage::ContactCache, w.origin);
                 w.contactCache.warmStart(w.contacts, w.bodies, *w.pool, w.impulses);

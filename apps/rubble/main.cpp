@@ -214,8 +214,6 @@ int run(const Options& options) {
                         : std::string(rubble::broadPhaseName(last.broadPhase)).c_str(),
                     last.movingPairs, last.staticPairs, last.meshPairs, last.meshTriangles);
         std::printf("narrow     %u manifolds, %u contact points", last.manifolds, last.contactPoints);
-        if (last.unsupportedPairs > 0)
-            std::printf("; %u pairs skipped: their shape kinds have no kernel yet", last.unsupportedPairs);
         std::printf("\n");
         std::printf("cache      %u of %u manifolds continue last step's, %u of %u points warm-started\n",
                     last.matchedManifolds, last.manifolds, last.warmStartedPoints, last.contactPoints);

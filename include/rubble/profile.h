@@ -48,7 +48,6 @@ struct Profile {
     std::uint32_t contactPoints = 0;
     std::uint32_t matchedManifolds = 0;   ///< manifolds that continue one of the previous step (same pair and parts)
     std::uint32_t warmStartedPoints = 0;  ///< points whose feature matched: they start from last step's impulses
-    std::uint32_t unsupportedPairs = 0;   ///< candidate pairs whose shape kinds have no narrow-phase kernel yet
     std::uint32_t constraints = 0;        ///< contact manifolds the solver works on (a dynamic body on one side)
     std::uint32_t colors = 0;             ///< graph colours of the contact constraints
     float laneOccupancy = 0;              ///< filled SIMD lanes over lanes used by the solver, in [0, 1]

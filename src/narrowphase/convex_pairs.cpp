@@ -63,15 +63,15 @@ void sphereSphere(const Vec3W<F>& a, const Vec3W<F>& b, const F& radiusB, Vec3W<
 
 /// Fills count and the second slot of a one-point contact.
 template <class F>
-void finishOnePoint(Contact<F>& c, float margin) {
+void finishOnePoint(Contact<F>& c, const F& margin) {
     c.p1 = c.p0;
     c.depth1 = c.depth0;
     c.feature1 = c.feature0;
-    c.count = selectInt<F>(c.depth0 >= F(-margin), 1, 0);
+    c.count = selectInt<F>(c.depth0 >= -margin, 1, 0);
 }
 
 template <class F>
-Contact<F> spheresKernel(const Vec3W<F>& cA, const F& rA, const Vec3W<F>& cB, const F& rB, float margin) {
+Contact<F> spheresKernel(const Vec3W<F>& cA, const F& rA, const Vec3W<F>& cB, const F& rB, const F& margin) {
     Contact<F> c;
     F distance;
     Vec3W<F> pointRel;
@@ -92,7 +92,7 @@ IntOf<F> segmentFeature(const F& t, float low, float high) {
 
 template <class F>
 Contact<F> sphereCapsuleKernel(const Vec3W<F>& cA, const F& rA, const Vec3W<F>& cB, const Vec3W<F>& h, const F& rB,
-                               float margin) {
+                               const F& margin) {
     Contact<F> c;
     const Vec3W<F> rel = cA - cB;  // relative to the capsule centre
     const F hh = simd::dot(h, h);
@@ -125,7 +125,7 @@ Vec3W<F> perpendicular(const Vec3W<F>& v) {
 
 template <class F>
 Contact<F> capsulesKernel(const Vec3W<F>& cA, const Vec3W<F>& hA, const F& rA, const Vec3W<F>& cB, const Vec3W<F>& hB,
-                          const F& rB, float margin) {
+                          const F& rB, const F& margin) {
     const F zero(0.0f), one(1.0f), two(2.0f);
     // Segments p1 + s d1 and p2 + t d2 (s, t in [0, 1]) relative to A's centre.
     const Vec3W<F> cAB = cB - cA;
@@ -206,8 +206,8 @@ Contact<F> capsulesKernel(const Vec3W<F>& cA, const Vec3W<F>& hA, const F& rA, c
     c.depth0 = simd::select(twoPoints, depthLo, c.depth0);
     c.feature0 = simd::select(twoPoints, featureLo, c.feature0);
 
-    const auto ok0 = c.depth0 >= F(-margin);
-    const auto ok1 = simd::andMask(twoPoints, c.depth1 >= F(-margin));
+    const auto ok0 = c.depth0 >= -margin;
+    const auto ok1 = simd::andMask(twoPoints, c.depth1 >= -margin);
     const auto moveDown = simd::andMask(simd::notMask(ok0), ok1);
     c.p0 = simd::select(moveDown, c.p1, c.p0);
     c.depth0 = simd::select(moveDown, c.depth1, c.depth0);
@@ -227,7 +227,7 @@ IntOf<F> boxFeature(const Vec3W<F>& p, const Vec3W<F>& h) {
 
 template <class F>
 Contact<F> sphereBoxKernel(const Vec3W<F>& cA, const F& rA, const Vec3W<F>& cB, const QuatW<F>& q, const Vec3W<F>& h,
-                           float margin) {
+                           const F& margin) {
     const F zero(0.0f), one(1.0f);
     const Vec3W<F> p = simd::rotateInverse(q, cA - cB);  // sphere centre in the box frame
     const Vec3W<F> clamped = simd::min(simd::max(p, -h), h);
@@ -277,10 +277,17 @@ void storeContact(const Contact<F>& c, const PairContacts& out, std::size_t i, b
     }
 }
 
+/// Lanes [i, i + lanesOf<F>) of the batch's own margins, or the uniform one.
+template <class F>
+F marginAt(const float* margins, std::size_t i, float margin) {
+    return margins != nullptr ? simd::load<F>(margins + i) : F(margin);
+}
+
 template <class F>
 void spheresAt(const SpherePairs& in, std::size_t i, float margin, const PairContacts& out) {
     const auto c = spheresKernel(Vec3W<F>::load(in.ax, in.ay, in.az, i), simd::load<F>(in.ar + i),
-                                 Vec3W<F>::load(in.bx, in.by, in.bz, i), simd::load<F>(in.br + i), margin);
+                                 Vec3W<F>::load(in.bx, in.by, in.bz, i), simd::load<F>(in.br + i),
+                                 marginAt<F>(in.margin, i, margin));
     storeContact(c, out, i, false);
 }
 
@@ -288,7 +295,7 @@ template <class F>
 void sphereCapsulesAt(const SphereCapsulePairs& in, std::size_t i, float margin, const PairContacts& out) {
     const auto c = sphereCapsuleKernel(Vec3W<F>::load(in.ax, in.ay, in.az, i), simd::load<F>(in.ar + i),
                                        Vec3W<F>::load(in.bx, in.by, in.bz, i), Vec3W<F>::load(in.hx, in.hy, in.hz, i),
-                                       simd::load<F>(in.br + i), margin);
+                                       simd::load<F>(in.br + i), marginAt<F>(in.margin, i, margin));
     storeContact(c, out, i, false);
 }
 
@@ -296,21 +303,25 @@ template <class F>
 void capsulesAt(const CapsulePairs& in, std::size_t i, float margin, const PairContacts& out) {
     const auto c = capsulesKernel(Vec3W<F>::load(in.ax, in.ay, in.az, i), Vec3W<F>::load(in.ahx, in.ahy, in.ahz, i),
                                   simd::load<F>(in.ar + i), Vec3W<F>::load(in.bx, in.by, in.bz, i),
-                                  Vec3W<F>::load(in.bhx, in.bhy, in.bhz, i), simd::load<F>(in.br + i), margin);
+                                  Vec3W<F>::load(in.bhx, in.bhy, in.bhz, i), simd::load<F>(in.br + i),
+                                  marginAt<F>(in.margin, i, margin));
     storeContact(c, out, i, true);
 }
 
 template <class F>
 void sphereBoxesAt(const SphereBoxPairs& in, std::size_t i, float margin, const PairContacts& out) {
-    const auto c = sphereBoxKernel(
-        Vec3W<F>::load(in.ax, in.ay, in.az, i), simd::load<F>(in.ar + i), Vec3W<F>::load(in.bx, in.by, in.bz, i),
-        QuatW<F>::load(in.qx, in.qy, in.qz, in.qw, i), Vec3W<F>::load(in.ex, in.ey, in.ez, i), margin);
+    const auto c =
+        sphereBoxKernel(Vec3W<F>::load(in.ax, in.ay, in.az, i), simd::load<F>(in.ar + i),
+                        Vec3W<F>::load(in.bx, in.by, in.bz, i), QuatW<F>::load(in.qx, in.qy, in.qz, in.qw, i),
+                        Vec3W<F>::load(in.ex, in.ey, in.ez, i), marginAt<F>(in.margin, i, margin));
     storeContact(c, out, i, false);
 }
 
-/// Full batches in SIMD lanes from 0, then a scalar tail; or everything scalar.
+/// Full batches in SIMD lanes from 0, then a scalar tail; or everything scalar. Flattened: the optimize pragma above
+/// makes GCC's inliner give up on the kernels' helpers, and a wide kernel left as calls passes every Vec3W through
+/// the stack (sphere-sphere ran at half speed that way); both forms get the whole kernel inlined into their loop.
 template <auto wideAt, auto scalarAt, class Pairs>
-void run(const Pairs& in, std::size_t n, float margin, const PairContacts& out, bool wide) {
+[[gnu::flatten]] void run(const Pairs& in, std::size_t n, float margin, const PairContacts& out, bool wide) {
     std::size_t i = 0;
     if (wide)
         for (const std::size_t end = simd::roundDownToLanes<FloatW>(n); i < end; i += simd::kLanes)

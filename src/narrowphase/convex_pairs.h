@@ -54,10 +54,14 @@ inline constexpr float kCapsuleParallelSine = 0.01f;
 
 // ---- Batched SoA forms ------------------------------------------------------------------------------------------
 
+// Every batch may carry its own margin per pair (`margin`, n entries; the stage's speculative margins); when it is
+// null the kernels use the `margin` argument for every pair.
+
 /// Sphere-sphere pairs: A centres and radii, B centres and radii (n entries each).
 struct SpherePairs {
     const float *ax, *ay, *az, *ar;
     const float *bx, *by, *bz, *br;
+    const float* margin = nullptr;
 };
 
 /// Sphere A against capsule B.
@@ -66,12 +70,14 @@ struct SphereCapsulePairs {
     const float *bx, *by, *bz;  ///< capsule centre
     const float *hx, *hy, *hz;  ///< capsule half axis (world)
     const float* br;
+    const float* margin = nullptr;
 };
 
 /// Capsule A against capsule B.
 struct CapsulePairs {
     const float *ax, *ay, *az, *ahx, *ahy, *ahz, *ar;
     const float *bx, *by, *bz, *bhx, *bhy, *bhz, *br;
+    const float* margin = nullptr;
 };
 
 /// Sphere A against box B (centre, unit quaternion, half extents).
@@ -80,6 +86,7 @@ struct SphereBoxPairs {
     const float *bx, *by, *bz;
     const float *qx, *qy, *qz, *qw;
     const float *ex, *ey, *ez;
+    const float* margin = nullptr;
 };
 
 /// Per-pair results: normal, point 0 (and point 1 for capsule pairs; others leave those arrays untouched, they may

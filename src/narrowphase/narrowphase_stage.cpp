@@ -1,7 +1,10 @@
 #include "narrowphase/narrowphase_stage.h"
 
 #include <algorithm>
+#include <cassert>
+#include <tuple>
 
+#include "bounds.h"
 #include "broadphase/static_bvh.h"
 #include "narrowphase/box_box.h"
 #include "narrowphase/convex_pairs.h"
@@ -9,12 +12,50 @@
 #include "narrowphase/triangle_pairs.h"
 #include "parallel.h"
 #include "shapes/mesh_adjacency.h"
+#include "simd/simd.h"
+#include "simd/vec.h"
 
 namespace rubble::detail {
 namespace {
 
-/// Pairs per parallel task: enough work to amortise a task, small enough for two threads to balance.
+using simd::FloatW;
+using simd::Vec3W;
+
+/// Candidates per parallel task: enough work to amortise a task, small enough for two threads to balance.
 constexpr std::size_t kChunk = 256;
+/// Chunks per task when their results are copied to the output.
+constexpr std::size_t kMergeChunks = 8;
+
+/// Pairs the batched kernels take at a time: four SIMD batches, so that their lanes and manifolds stay in L1.
+constexpr std::size_t kBlock = 64;
+static_assert(kBlock % simd::kLanes == 0, "blocks hold whole batches");
+
+/// Input lanes of a block: per side the shape's pose (origin and orientation; a sphere's centre) and size (half
+/// extents; a sphere's radius in x), then each pair's margin.
+enum InputLane : std::size_t { kPx, kPy, kPz, kQx, kQy, kQz, kQw, kSx, kSy, kSz, kSideLanes };
+constexpr std::size_t kSideB = kSideLanes;
+constexpr std::size_t kMarginLane = 2 * kSideLanes;
+constexpr std::size_t kInputLanes = kMarginLane + 1;
+
+/// Kernels that run in SIMD lanes, and how each side of their pairs is laid out in the input lanes.
+enum class Batched : std::uint8_t { SphereSphere, SphereBox, SphereCapsule, CapsuleCapsule, BoxBox, Count };
+/// Sphere: centre in the position lanes, radius in size x. Box: origin, orientation, half extents. Capsule: centre,
+/// half axis (in the orientation lanes x, y, z), radius in size x.
+enum class SideForm : std::uint8_t { Sphere, Box, Capsule };
+
+}  // namespace
+
+struct NarrowPhaseStage::Scratch {
+    /// Jobs of the chunk for each batched kernel.
+    std::vector<std::uint32_t> batched[static_cast<int>(Batched::Count)];
+    alignas(64) float in[kInputLanes][kBlock];
+    /// Results of the closed-form kernels: normal xyz, point xyz, depth, second point xyz, depth.
+    alignas(64) float out[11][kBlock];
+    alignas(64) std::uint32_t feature[2][kBlock];
+    alignas(64) std::int32_t count[kBlock];
+};
+
+namespace {
 
 struct Posed {
     Transform pose;  ///< of the shape's local origin
@@ -30,10 +71,6 @@ Posed posed(const BodyStorage& storage, const std::vector<Shape>& shapes, std::u
     const Quat q{m.qx[i], m.qy[i], m.qz[i], m.qw[i]};
     const Vec3 origin = Vec3{m.px[i], m.py[i], m.pz[i]} - rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]});
     return {{origin, q}, &shapes[m.shape[i]]};
-}
-
-const Shape& shapeOf(const BodyStorage& storage, const std::vector<Shape>& shapes, std::uint32_t i, bool isStatic) {
-    return shapes[isStatic ? storage.statics.shape[i] : storage.moving.shape[i]];
 }
 
 /// A side of a contact pair: the body's shape, or the compound child the pair names, posed in the world.
@@ -69,14 +106,6 @@ Vec3 sphereCenter(const BodyStorage& storage, const std::vector<Shape>& shapes, 
     return posedSide(storage, shapes, p, sideB).pose.position;
 }
 
-float sphereRadius(const BodyStorage& storage, const std::vector<Shape>& shapes, const ContactPair& p, bool sideB) {
-    const std::uint32_t i = sideB ? p.b : p.a;
-    const bool isStatic = sideB ? p.bStatic : p.aStatic;
-    const std::uint16_t child = sideB ? p.childB : p.childA;
-    const Shape& shape = shapeOf(storage, shapes, i, isStatic);
-    return child == kNoChild ? shape.radius : shape.children[child].shape->radius;
-}
-
 /// The capsule-box kernel sees the capsule as A; the stage's order has the box first. Same contact seen from the
 /// other body: the normal turns round and the points move across the overlap onto the capsule.
 void collideBoxCapsule(const Posed& box, const Posed& capsule, float margin, Manifold& out) {
@@ -94,7 +123,7 @@ void collide(PairKernel kernel, const Posed& a, const Posed& b, std::uint32_t tr
     TriangleVertices tri;
     std::uint8_t active = 0;
     if (kernel == PairKernel::SphereTriangle || kernel == PairKernel::CapsuleTriangle ||
-        kernel == PairKernel::BoxTriangle)
+        kernel == PairKernel::BoxTriangle || kernel == PairKernel::HullTriangle)
         triangleOf(b, triangle, tri, active);
     switch (kernel) {
         case PairKernel::SphereSphere:
@@ -138,19 +167,245 @@ void collide(PairKernel kernel, const Posed& a, const Posed& b, std::uint32_t tr
         case PairKernel::BoxTriangle:
             collideBoxTriangle(a.pose, a.shape->halfExtents, tri, active, margin, out);
             break;
-        case PairKernel::Unsupported:
+        case PairKernel::HullTriangle:
+            collideHullTriangle(*a.shape->hull, adjacency(a), a.pose, tri, active, margin, out);
+            break;
         case PairKernel::Count:
             break;
     }
 }
 
+/// The pair's margin for this step (see NarrowPhaseStage::run): the fixed margin plus how far the two surfaces can
+/// close in dt. Written once for both lane types so that batched and one-at-a-time pairs get the same margins.
+template <class F>
+F speculativeMargin(const NarrowPhaseParams& params, const Vec3W<F>& vA, const Vec3W<F>& wA, const F& reachA,
+                    const Vec3W<F>& vB, const Vec3W<F>& wB, const F& reachB) {
+    const F dt(params.dt), two(2.0f);
+    const F turnA = simd::min(simd::length(wA) * dt, two) * reachA;
+    const F turnB = simd::min(simd::length(wB) * dt, two) * reachB;
+    return F(params.margin) + simd::length(vB - vA) * dt + turnA + turnB;
+}
+
+/// What bounds the approach of one side of a pair: its velocities and the reach of its shape (zero for statics).
+template <class F>
+struct Motion {
+    Vec3W<F> v = Vec3W<F>::zero(), w = Vec3W<F>::zero();
+    F reach = F(0.0f);
+};
+
+Motion<float> motionOf(const BodyStorage& storage, const ShapeTables& tables, const ContactPair& p, bool sideB) {
+    if (sideB ? p.bStatic : p.aStatic) return {};
+    const MovingBodies& m = storage.moving;
+    const std::uint32_t i = sideB ? p.b : p.a;
+    return {{m.vx[i], m.vy[i], m.vz[i]}, {m.wx[i], m.wy[i], m.wz[i]}, tables.reach[m.shape[i]]};
+}
+
+/// The size columns of ShapeTables for a shape (see there).
+Vec3 sizeOf(const Shape& shape) {
+    switch (shape.kind) {
+        case ShapeKind::Box:
+            return shape.halfExtents;
+        case ShapeKind::Sphere:
+            return {shape.radius, 0, 0};
+        case ShapeKind::Capsule:
+            return {shape.radius, shape.halfHeight, 0};
+        default:
+            return {};
+    }
+}
+
+/// One side of SIMD-width pairs, as the batched kernels take it.
+struct SideLanes {
+    Vec3W<FloatW> position;  ///< shape origin (a sphere's or capsule's centre)
+    simd::QuatW<FloatW> q;
+    Vec3W<FloatW> size;  ///< as ShapeTables
+    Motion<FloatW> motion;
+};
+
+/// How the pairs of a batch reach one side's data: all whole moving bodies and all whole static bodies are
+/// gathered lane-wide; anything else (compound children, a mix) goes lane by lane.
+enum class SideSource { Moving, Static, Mixed };
+
+/// Side `sideB` of the pairs jobs[0 .. kLanes) (jobs of `chunk`), gathered into lanes. Whole moving bodies: the shape
+/// origin from the centre of mass (com - R lc, as posed() computes it), except that a sphere is at its centre of
+/// mass (as sphereCenter() has it).
+[[gnu::flatten]] SideLanes gatherSide(const NarrowPhaseStage::Chunk& chunk, const std::uint32_t* jobs, bool sideB,
+                                      SideForm form, const BodyStorage& storage, const std::vector<Shape>& shapes,
+                                      const ShapeTables& tables) {
+    using simd::IntW;
+    alignas(64) std::int32_t body[simd::kLanes], shape[simd::kLanes];
+    bool allMoving = true, allStatic = true, oneShape = true;
+    const MovingBodies& m = storage.moving;
+    const StaticBodies& st = storage.statics;
+    for (std::size_t k = 0; k < simd::kLanes; ++k) {
+        const ContactPair& p = chunk.jobs[jobs[k]].pair;
+        const std::uint32_t i = sideB ? p.b : p.a;
+        const bool isStatic = sideB ? p.bStatic : p.aStatic;
+        const bool whole = (sideB ? p.childB : p.childA) == kNoChild;
+        allMoving = allMoving && whole && !isStatic;
+        allStatic = allStatic && whole && isStatic;
+        body[k] = static_cast<std::int32_t>(i);
+        shape[k] = static_cast<std::int32_t>(isStatic ? st.shape[i] : m.shape[i]);
+        oneShape = oneShape && shape[k] == shape[0];
+    }
+    const SideSource source = allMoving ? SideSource::Moving : (allStatic ? SideSource::Static : SideSource::Mixed);
+    SideLanes side;
+    if (source != SideSource::Mixed) {
+        const IntW index = simd::loadInt<IntW>(body), shapeIndex = simd::loadInt<IntW>(shape);
+        // Per-shape values: one load when every lane has the same shape (a pile of one kind of box), else gathered.
+        auto perShape = [&](const std::vector<float>& table) {
+            return oneShape ? FloatW(table[static_cast<std::size_t>(shape[0])])
+                            : simd::gather(table.data(), shapeIndex);
+        };
+        auto vec = [&](const AlignedVector<float>& x, const AlignedVector<float>& y, const AlignedVector<float>& z) {
+            return Vec3W<FloatW>{simd::gather(x.data(), index), simd::gather(y.data(), index),
+                                 simd::gather(z.data(), index)};
+        };
+        if (source == SideSource::Moving) {
+            side.position = vec(m.px, m.py, m.pz);
+            side.q = {simd::gather(m.qx.data(), index), simd::gather(m.qy.data(), index),
+                      simd::gather(m.qz.data(), index), simd::gather(m.qw.data(), index)};
+            if (form != SideForm::Sphere)
+                side.position = side.position - simd::rotate(side.q, vec(m.lcx, m.lcy, m.lcz));
+            side.motion = {vec(m.vx, m.vy, m.vz), vec(m.wx, m.wy, m.wz), perShape(tables.reach)};
+        } else {
+            side.position = vec(st.px, st.py, st.pz);
+            side.q = {simd::gather(st.qx.data(), index), simd::gather(st.qy.data(), index),
+                      simd::gather(st.qz.data(), index), simd::gather(st.qw.data(), index)};
+        }
+        side.size = {perShape(tables.sizeX), perShape(tables.sizeY), perShape(tables.sizeZ)};
+        return side;
+    }
+    // Lane by lane, through the same helpers as the one-pair kernels.
+    alignas(64) float lanes[17][simd::kLanes];
+    for (std::size_t k = 0; k < simd::kLanes; ++k) {
+        const ContactPair& p = chunk.jobs[jobs[k]].pair;
+        const Posed posed = posedSide(storage, shapes, p, sideB);
+        const Vec3 position = form == SideForm::Sphere ? sphereCenter(storage, shapes, p, sideB) : posed.pose.position;
+        const Quat q = posed.pose.rotation;
+        const Vec3 size = sizeOf(*posed.shape);
+        const Motion<float> motion = motionOf(storage, tables, p, sideB);
+        const float values[17] = {position.x, position.y, position.z, q.x,        q.y,         q.z,
+                                  q.w,        size.x,     size.y,     size.z,     motion.v.x,  motion.v.y,
+                                  motion.v.z, motion.w.x, motion.w.y, motion.w.z, motion.reach};
+        for (std::size_t f = 0; f < 17; ++f) lanes[f][k] = values[f];
+    }
+    auto load = [&](std::size_t f) { return simd::load<FloatW>(lanes[f]); };
+    auto load3 = [&](std::size_t f) { return Vec3W<FloatW>{load(f), load(f + 1), load(f + 2)}; };
+    side.position = load3(0);
+    side.q = {load(3), load(4), load(5), load(6)};
+    side.size = load3(7);
+    side.motion = {load3(10), load3(13), load(16)};
+    return side;
+}
+
+/// Pairs [k0, k0 + kLanes) of a block into its input lanes; `jobs` holds the block's jobs, `count` of them valid
+/// (lanes past the end repeat the last job, so every gather reads a real body; their results are not used).
+void gatherBatch(const NarrowPhaseStage::Chunk& chunk, const std::uint32_t* jobs, std::size_t count, std::size_t k0,
+                 SideForm formA, SideForm formB, const BodyStorage& storage, const std::vector<Shape>& shapes,
+                 const ShapeTables& tables, const NarrowPhaseParams& params, NarrowPhaseStage::Scratch& s) {
+    std::uint32_t batch[simd::kLanes];
+    for (std::size_t k = 0; k < simd::kLanes; ++k) batch[k] = jobs[std::min(k0 + k, count - 1)];
+    const SideLanes a = gatherSide(chunk, batch, false, formA, storage, shapes, tables);
+    const SideLanes b = gatherSide(chunk, batch, true, formB, storage, shapes, tables);
+    for (const auto& [side, form, base] : {std::tuple{&a, formA, std::size_t{0}}, std::tuple{&b, formB, kSideB}}) {
+        side->position.store(s.in[base + kPx], s.in[base + kPy], s.in[base + kPz], k0);
+        side->size.store(s.in[base + kSx], s.in[base + kSy], s.in[base + kSz], k0);
+        if (form == SideForm::Capsule) {
+            // The capsule's segment: centre -/+ this half axis (capsuleSegmentOf).
+            const Vec3W<FloatW> axis = simd::rotate(side->q, Vec3W<FloatW>{FloatW(0.0f), side->size.y, FloatW(0.0f)});
+            axis.store(s.in[base + kQx], s.in[base + kQy], s.in[base + kQz], k0);
+        } else {
+            side->q.store(s.in[base + kQx], s.in[base + kQy], s.in[base + kQz], s.in[base + kQw], k0);
+        }
+    }
+    simd::store(s.in[kMarginLane] + k0, speculativeMargin<FloatW>(params, a.motion.v, a.motion.w, a.motion.reach,
+                                                                  b.motion.v, b.motion.w, b.motion.reach));
+}
+
+/// The jobs of one batched kernel in a chunk, a block at a time: each side's pose, size and motion gathered into
+/// lanes, margins in SIMD, then the kernel. Box-box writes each job's manifold in place; the closed-form kernels
+/// leave SoA results that are copied into the jobs' manifolds.
+void collideBatched(Batched kernel, const std::vector<std::uint32_t>& list, NarrowPhaseStage::Chunk& chunk,
+                    NarrowPhaseStage::Scratch& s, const BodyStorage& storage, const std::vector<Shape>& shapes,
+                    const ShapeTables& tables, const NarrowPhaseParams& params) {
+    const auto& in = s.in;
+    const std::size_t b = kSideB;
+    const float* margin = in[kMarginLane];
+    static constexpr SideForm kForms[static_cast<int>(Batched::Count)][2] = {{SideForm::Sphere, SideForm::Sphere},
+                                                                             {SideForm::Sphere, SideForm::Box},
+                                                                             {SideForm::Sphere, SideForm::Capsule},
+                                                                             {SideForm::Capsule, SideForm::Capsule},
+                                                                             {SideForm::Box, SideForm::Box}};
+    const SideForm formA = kForms[static_cast<int>(kernel)][0], formB = kForms[static_cast<int>(kernel)][1];
+    const PairContacts result{s.out[0],     s.out[1], s.out[2], s.out[3], s.out[4], s.out[5],  s.out[6],
+                              s.feature[0], s.count,  s.out[7], s.out[8], s.out[9], s.out[10], s.feature[1]};
+    for (std::size_t first = 0; first < list.size(); first += kBlock) {
+        const std::uint32_t* jobs = list.data() + first;
+        const std::size_t n = std::min(kBlock, list.size() - first);
+        for (std::size_t k0 = 0; k0 < n; k0 += simd::kLanes)
+            gatherBatch(chunk, jobs, n, k0, formA, formB, storage, shapes, tables, params, s);
+        switch (kernel) {
+            case Batched::BoxBox:
+                collideBoxesBatch(
+                    {in[kPx],     in[kPy],     in[kPz],     in[kQx],     in[kQy],     in[kQz],     in[kQw],
+                     in[kSx],     in[kSy],     in[kSz],     in[b + kPx], in[b + kPy], in[b + kPz], in[b + kQx],
+                     in[b + kQy], in[b + kQz], in[b + kQw], in[b + kSx], in[b + kSy], in[b + kSz], margin},
+                    n, chunk.manifolds.data(), jobs);
+                continue;
+            case Batched::SphereSphere:
+                collideSpheresBatch(
+                    {in[kPx], in[kPy], in[kPz], in[kSx], in[b + kPx], in[b + kPy], in[b + kPz], in[b + kSx], margin}, n,
+                    params.margin, result);
+                break;
+            case Batched::SphereBox:
+                collideSphereBoxesBatch(
+                    {in[kPx], in[kPy], in[kPz], in[kSx], in[b + kPx], in[b + kPy], in[b + kPz], in[b + kQx],
+                     in[b + kQy], in[b + kQz], in[b + kQw], in[b + kSx], in[b + kSy], in[b + kSz], margin},
+                    n, params.margin, result);
+                break;
+            case Batched::SphereCapsule:
+                collideSphereCapsulesBatch({in[kPx], in[kPy], in[kPz], in[kSx], in[b + kPx], in[b + kPy], in[b + kPz],
+                                            in[b + kQx], in[b + kQy], in[b + kQz], in[b + kSx], margin},
+                                           n, params.margin, result);
+                break;
+            case Batched::CapsuleCapsule:
+                collideCapsulesBatch(
+                    {in[kPx], in[kPy], in[kPz], in[kQx], in[kQy], in[kQz], in[kSx], in[b + kPx], in[b + kPy],
+                     in[b + kPz], in[b + kQx], in[b + kQy], in[b + kQz], in[b + kSx], margin},
+                    n, params.margin, result);
+                break;
+            case Batched::Count:
+                break;
+        }
+        for (std::size_t k = 0; k < n; ++k) {
+            Manifold& m = chunk.manifolds[jobs[k]];
+            m.pointCount = s.count[k];
+            m.normal = {s.out[0][k], s.out[1][k], s.out[2][k]};
+            m.points[0] = {{s.out[3][k], s.out[4][k], s.out[5][k]}, s.out[6][k], s.feature[0][k]};
+            if (m.pointCount > 1)
+                m.points[1] = {{s.out[7][k], s.out[8][k], s.out[9][k]}, s.out[10][k], s.feature[1][k]};
+        }
+    }
+}
+
 }  // namespace
 
-NarrowPhaseStage::NarrowPhaseStage() = default;
+NarrowPhaseStage::NarrowPhaseStage() {
+    // Kinds that meet in a job: the lower one is a sphere, box, capsule or hull (compounds are split into their
+    // children, meshes and heightfields are static and only ever the upper one).
+    for (int lower = 0; lower < kShapeKindCount; ++lower)
+        for (int upper = 0; upper < kShapeKindCount; ++upper) {
+            const auto lo = static_cast<ShapeKind>(lower), hi = static_cast<ShapeKind>(upper);
+            const bool meets = lo <= hi && lo <= ShapeKind::ConvexHull && hi != ShapeKind::Compound;
+            kernels_[lower][upper] = meets ? pairKernel(lo, hi) : PairKernel::Count;
+        }
+}
 NarrowPhaseStage::~NarrowPhaseStage() = default;
 
 PairKernel pairKernel(ShapeKind lower, ShapeKind upper) {
     using K = ShapeKind;
+    assert(lower <= K::ConvexHull && lower <= upper && upper != K::Compound);
     if (lower == K::Sphere) {
         if (upper == K::Sphere) return PairKernel::SphereSphere;
         if (upper == K::Box) return PairKernel::SphereBox;
@@ -162,129 +417,212 @@ PairKernel pairKernel(ShapeKind lower, ShapeKind upper) {
     if (lower == K::Box && upper == K::ConvexHull) return PairKernel::BoxHull;
     if (lower == K::Capsule && upper == K::Capsule) return PairKernel::CapsuleCapsule;
     if (lower == K::Capsule && upper == K::ConvexHull) return PairKernel::CapsuleHull;
-    if (lower == K::ConvexHull && upper == K::ConvexHull) return PairKernel::HullHull;
     if (upper == K::TriangleMesh || upper == K::Heightfield) {
         if (lower == K::Sphere) return PairKernel::SphereTriangle;
         if (lower == K::Capsule) return PairKernel::CapsuleTriangle;
         if (lower == K::Box) return PairKernel::BoxTriangle;
+        return PairKernel::HullTriangle;
     }
-    return PairKernel::Unsupported;
+    return PairKernel::HullHull;  // both hulls: the one pair the tests above leave
+}
+
+void NarrowPhaseStage::prepareShapes(const std::vector<Shape>& shapes) {
+    const std::size_t n = shapes.size();
+    for (auto* table : {&tables_.sizeX, &tables_.sizeY, &tables_.sizeZ, &tables_.reach}) table->resize(n);
+    tables_.kind.resize(n);
+    knownHull_.resize(n, nullptr);
+    auto ensureAdjacency = [&](const std::shared_ptr<const ConvexHull>& hull) {
+        HullEntry& entry = hullAdjacency_[hull.get()];
+        if (!entry.adjacency) {
+            entry.hull = hull;
+            entry.adjacency = std::make_unique<HullAdjacency>(buildHullAdjacency(*hull));
+        }
+    };
+    // Every hull any shape holds gets its adjacency here, so the parallel part only reads the map. A per-slot
+    // pointer makes the common case (hull seen before) one comparison: a hull in the map is kept alive by it, so an
+    // equal address is the same hull.
+    for (std::size_t s = 0; s < n; ++s) {
+        const Shape& shape = shapes[s];
+        tables_.kind[s] = shape.kind;
+        const Vec3 size = sizeOf(shape);
+        tables_.sizeX[s] = size.x, tables_.sizeY[s] = size.y, tables_.sizeZ[s] = size.z;
+        tables_.reach[s] = rotationReach(shape);
+        if (shape.kind == ShapeKind::ConvexHull && shape.hull && knownHull_[s] != shape.hull.get()) {
+            ensureAdjacency(shape.hull);
+            knownHull_[s] = shape.hull.get();
+        } else if (shape.kind == ShapeKind::Compound) {
+            for (const CompoundChild& child : shape.children)
+                if (child.shape->kind == ShapeKind::ConvexHull) ensureAdjacency(child.shape->hull);
+        }
+    }
 }
 
 void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& storage,
-                           const std::vector<Shape>& shapes, float margin, TaskPool& pool, Contacts& out) {
-    out.clear();
-    // Jobs in the candidates' canonical order: moving pairs, then moving-static pairs. A is the body whose shape
-    // kind is lower, so each kernel sees its shapes in its own argument order.
-    jobs_.clear();
-    // Compounds expand into one job per child (per child pair for two compounds), in child order.
-    auto addJob = [&](std::uint32_t first, bool firstStatic, std::uint32_t second, bool secondStatic,
-                      std::uint32_t triangle) {
-        const Shape& s1 = shapeOf(storage, shapes, first, firstStatic);
-        const Shape& s2 = shapeOf(storage, shapes, second, secondStatic);
-        const bool compound1 = s1.kind == ShapeKind::Compound, compound2 = s2.kind == ShapeKind::Compound;
-        const std::size_t n1 = compound1 ? s1.children.size() : 1, n2 = compound2 ? s2.children.size() : 1;
-        for (std::size_t c1 = 0; c1 < n1; ++c1)
-            for (std::size_t c2 = 0; c2 < n2; ++c2) {
-                const ShapeKind k1 = compound1 ? s1.children[c1].shape->kind : s1.kind;
-                const ShapeKind k2 = compound2 ? s2.children[c2].shape->kind : s2.kind;
-                const auto child1 = compound1 ? static_cast<std::uint16_t>(c1) : kNoChild;
-                const auto child2 = compound2 ? static_cast<std::uint16_t>(c2) : kNoChild;
-                Job job;
-                if (k2 < k1) {
-                    job.pair = {second, first, secondStatic, firstStatic, triangle, child2, child1};
-                    job.kernel = pairKernel(k2, k1);
-                } else {
-                    job.pair = {first, second, firstStatic, secondStatic, triangle, child1, child2};
-                    job.kernel = pairKernel(k1, k2);
-                }
-                jobs_.push_back(job);
-            }
-    };
-    for (const BodyPair& p : candidates.moving) addJob(p.a, false, p.b, false, ~0u);
-    for (const BodyPair& p : candidates.statics) addJob(p.a, false, p.b, true, ~0u);
-    // A body against a mesh: one job per triangle the broad phase handed over (the mesh is always B).
-    for (const MeshPair& p : candidates.meshes)
-        for (std::uint32_t k = 0; k < p.triangleCount; ++k)
-            addJob(p.moving, false, p.staticBody, true, candidates.meshTriangles[p.firstTriangle + k]);
+                           const std::vector<Shape>& shapes, const NarrowPhaseParams& params, TaskPool& pool,
+                           Contacts& out) {
+    prepareShapes(shapes);
+    while (scratch_.size() < static_cast<std::size_t>(pool.threadCount()))
+        scratch_.push_back(std::make_unique<Scratch>());
 
-    // Hull adjacency for every hull a job will meet, built here so the parallel part only reads the map.
-    for (const Job& job : jobs_) {
-        const PairKernel k = job.kernel;
-        if (k != PairKernel::SphereHull && k != PairKernel::BoxHull && k != PairKernel::CapsuleHull &&
-            k != PairKernel::HullHull)
-            continue;
-        for (bool sideB : {false, true}) {
-            const Posed p = posedSide(storage, shapes, job.pair, sideB);
-            if (p.shape->kind != ShapeKind::ConvexHull) continue;
-            HullEntry& entry = hullAdjacency_[p.shape->hull.get()];
-            if (!entry.adjacency) {
-                entry.hull = p.shape->hull;
-                entry.adjacency = std::make_unique<HullAdjacency>(buildHullAdjacency(*p.shape->hull));
+    // One index space over the candidates in canonical order: moving pairs, moving-static pairs, then every
+    // triangle the broad phase handed over (so a body on a mesh spreads over chunks like any other work).
+    const std::size_t movingCount = candidates.moving.size(), staticCount = candidates.statics.size();
+    const std::size_t units = movingCount + staticCount + candidates.meshTriangles.size();
+    const std::size_t chunkCount = TaskPool::chunkCount(units, kChunk);
+    if (chunks_.size() < chunkCount) chunks_.resize(chunkCount);
+
+    pool.forChunks(units, kChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int worker) {
+        Chunk& chunk = chunks_[c];
+        chunk.jobs.clear();
+        // A is the body whose shape kind is lower, so each kernel sees its shapes in its own argument order.
+        // Compounds expand into one job per child (per child pair for two compounds), in child order.
+        auto addJob = [&](std::uint32_t first, bool firstStatic, std::uint32_t second, bool secondStatic,
+                          std::uint32_t triangle) {
+            const std::uint32_t shape1 = firstStatic ? storage.statics.shape[first] : storage.moving.shape[first];
+            const std::uint32_t shape2 = secondStatic ? storage.statics.shape[second] : storage.moving.shape[second];
+            const ShapeKind kind1 = tables_.kind[shape1], kind2 = tables_.kind[shape2];
+            if (kind1 != ShapeKind::Compound && kind2 != ShapeKind::Compound) {
+                Job job;
+                if (kind2 < kind1) {
+                    job.pair = {second, first, secondStatic, firstStatic, triangle, kNoChild, kNoChild};
+                    job.kernel = kernels_[static_cast<int>(kind2)][static_cast<int>(kind1)];
+                } else {
+                    job.pair = {first, second, firstStatic, secondStatic, triangle, kNoChild, kNoChild};
+                    job.kernel = kernels_[static_cast<int>(kind1)][static_cast<int>(kind2)];
+                }
+                chunk.jobs.push_back(job);
+                return;
+            }
+            const Shape& s1 = shapes[shape1];
+            const Shape& s2 = shapes[shape2];
+            const bool compound1 = s1.kind == ShapeKind::Compound, compound2 = s2.kind == ShapeKind::Compound;
+            const std::size_t n1 = compound1 ? s1.children.size() : 1, n2 = compound2 ? s2.children.size() : 1;
+            for (std::size_t c1 = 0; c1 < n1; ++c1)
+                for (std::size_t c2 = 0; c2 < n2; ++c2) {
+                    const ShapeKind k1 = compound1 ? s1.children[c1].shape->kind : s1.kind;
+                    const ShapeKind k2 = compound2 ? s2.children[c2].shape->kind : s2.kind;
+                    const auto child1 = compound1 ? static_cast<std::uint16_t>(c1) : kNoChild;
+                    const auto child2 = compound2 ? static_cast<std::uint16_t>(c2) : kNoChild;
+                    Job job;
+                    if (k2 < k1) {
+                        job.pair = {second, first, secondStatic, firstStatic, triangle, child2, child1};
+                        job.kernel = pairKernel(k2, k1);
+                    } else {
+                        job.pair = {first, second, firstStatic, secondStatic, triangle, child1, child2};
+                        job.kernel = pairKernel(k1, k2);
+                    }
+                    chunk.jobs.push_back(job);
+                }
+        };
+        for (std::size_t u = begin; u < std::min(end, movingCount); ++u)
+            addJob(candidates.moving[u].a, false, candidates.moving[u].b, false, ~0u);
+        for (std::size_t u = std::max(begin, movingCount); u < std::min(end, movingCount + staticCount); ++u) {
+            const BodyPair& p = candidates.statics[u - movingCount];
+            addJob(p.a, false, p.b, true, ~0u);
+        }
+        // A body against a mesh: one job per triangle (the mesh is always B). Mesh pairs hold consecutive runs of
+        // meshTriangles, so the pair of the chunk's first triangle is found once and then followed.
+        if (end > movingCount + staticCount) {
+            const auto first =
+                static_cast<std::uint32_t>(std::max(begin, movingCount + staticCount) - movingCount - staticCount);
+            auto mesh = std::upper_bound(candidates.meshes.begin(), candidates.meshes.end(), first,
+                                         [](std::uint32_t t, const MeshPair& m) { return t < m.firstTriangle; }) -
+                        1;
+            for (auto t = first; t < end - movingCount - staticCount; ++t) {
+                while (t >= mesh->firstTriangle + mesh->triangleCount) ++mesh;
+                addJob(mesh->moving, false, mesh->staticBody, true, candidates.meshTriangles[t]);
             }
         }
-    }
-    for (auto& bucket : bucket_) bucket.clear();
-    for (std::uint32_t j = 0; j < jobs_.size(); ++j) bucket_[static_cast<int>(jobs_[j].kernel)].push_back(j);
-    out.unsupportedPairs = static_cast<std::uint32_t>(bucket_[static_cast<int>(PairKernel::Unsupported)].size());
-    perJob_.resize(jobs_.size());
+        runChunk(chunk, *scratch_[static_cast<std::size_t>(worker)], storage, shapes, params);
+    });
 
-    // Sphere-sphere: gathered into SoA and run in SIMD lanes.
-    const std::vector<std::uint32_t>& spheres = bucket_[static_cast<int>(PairKernel::SphereSphere)];
-    if (!spheres.empty()) {
-        const std::size_t n = spheres.size();
-        for (auto& a : sphereIn_) a.resize(n);
-        for (auto& a : sphereOut_) a.resize(n);
-        sphereFeature_.resize(n);
-        sphereCount_.resize(n);
-        pool.forChunks(n, kChunk * 4, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-            for (std::size_t k = begin; k < end; ++k) {
-                const ContactPair& p = jobs_[spheres[k]].pair;
-                const Vec3 a = sphereCenter(storage, shapes, p, false), b = sphereCenter(storage, shapes, p, true);
-                sphereIn_[0][k] = a.x, sphereIn_[1][k] = a.y, sphereIn_[2][k] = a.z;
-                sphereIn_[3][k] = sphereRadius(storage, shapes, p, false);
-                sphereIn_[4][k] = b.x, sphereIn_[5][k] = b.y, sphereIn_[6][k] = b.z;
-                sphereIn_[7][k] = sphereRadius(storage, shapes, p, true);
-            }
-            const SpherePairs in{sphereIn_[0].data() + begin, sphereIn_[1].data() + begin, sphereIn_[2].data() + begin,
-                                 sphereIn_[3].data() + begin, sphereIn_[4].data() + begin, sphereIn_[5].data() + begin,
-                                 sphereIn_[6].data() + begin, sphereIn_[7].data() + begin};
-            PairContacts result{
-                sphereOut_[0].data() + begin, sphereOut_[1].data() + begin,  sphereOut_[2].data() + begin,
-                sphereOut_[3].data() + begin, sphereOut_[4].data() + begin,  sphereOut_[5].data() + begin,
-                sphereOut_[6].data() + begin, sphereFeature_.data() + begin, sphereCount_.data() + begin};
-            collideSpheresBatch(in, end - begin, margin, result);
-            for (std::size_t k = begin; k < end; ++k) {
-                Manifold& m = perJob_[spheres[k]];
-                m.pointCount = sphereCount_[k];
-                m.normal = {sphereOut_[0][k], sphereOut_[1][k], sphereOut_[2][k]};
-                m.points[0] = {
-                    {sphereOut_[3][k], sphereOut_[4][k], sphereOut_[5][k]}, sphereOut_[6][k], sphereFeature_[k]};
-            }
-        });
+    // Each chunk's touching jobs go to the output at the offset its predecessors leave: canonical order on any
+    // number of threads, one copy per manifold, and no output element constructed only to be overwritten.
+    std::size_t total = 0;
+    std::uint32_t points = 0;
+    for (std::size_t c = 0; c < chunkCount; ++c) {
+        chunks_[c].offset = total;
+        total += chunks_[c].touching;
+        points += chunks_[c].points;
     }
-
-    // Every other kernel: one pair at a time, in parallel chunks of its bucket.
-    for (int kernel = 0; kernel < static_cast<int>(PairKernel::Unsupported); ++kernel) {
-        if (kernel == static_cast<int>(PairKernel::SphereSphere)) continue;
-        const std::vector<std::uint32_t>& bucket = bucket_[kernel];
-        pool.forChunks(bucket.size(), kChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-            for (std::size_t k = begin; k < end; ++k) {
-                const Job& job = jobs_[bucket[k]];
-                collide(job.kernel, posedSide(storage, shapes, job.pair, false),
-                        posedSide(storage, shapes, job.pair, true), job.pair.triangle, margin, hullAdjacency_,
-                        perJob_[bucket[k]]);
+    out.pairs.resize(total);
+    out.manifolds.resize(total);
+    out.pointCount = points;
+    pool.forChunks(chunkCount, kMergeChunks, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t c = begin; c < end; ++c) {
+            const Chunk& chunk = chunks_[c];
+            std::size_t o = chunk.offset;
+            for (std::size_t j = 0; j < chunk.jobs.size(); ++j) {
+                if (chunk.manifolds[j].pointCount == 0) continue;
+                out.pairs[o] = chunk.jobs[j].pair;
+                out.manifolds[o] = chunk.manifolds[j];
+                ++o;
             }
-        });
-    }
-    for (std::uint32_t j : bucket_[static_cast<int>(PairKernel::Unsupported)]) perJob_[j].pointCount = 0;
+        }
+    });
+}
 
-    // Compact in job order: the output does not depend on buckets, chunks or threads.
-    for (std::uint32_t j = 0; j < jobs_.size(); ++j) {
-        if (perJob_[j].pointCount == 0) continue;
-        out.pairs.push_back(jobs_[j].pair);
-        out.manifolds.push_back(perJob_[j]);
-        out.pointCount += static_cast<std::uint32_t>(perJob_[j].pointCount);
+void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorage& storage,
+                                const std::vector<Shape>& shapes, const NarrowPhaseParams& params) const {
+    const std::size_t n = chunk.jobs.size();
+    if (chunk.manifolds.size() < n) chunk.manifolds.resize(n);
+    for (auto& list : scratch.batched) list.clear();
+    // Pairs with a batched kernel are collected for it; every other pair runs here, one at a time, with its own
+    // speculative margin. A body on a mesh is one job per triangle, all in a row: their poses and margin are
+    // worked out once.
+    const ContactPair* last = nullptr;
+    Posed a{}, b{};
+    float margin = 0;
+    for (std::uint32_t j = 0; j < n; ++j) {
+        const Job& job = chunk.jobs[j];
+        Batched batched = Batched::Count;
+        switch (job.kernel) {
+            case PairKernel::SphereSphere:
+                batched = Batched::SphereSphere;
+                break;
+            case PairKernel::SphereBox:
+                batched = Batched::SphereBox;
+                break;
+            case PairKernel::SphereCapsule:
+                batched = Batched::SphereCapsule;
+                break;
+            case PairKernel::CapsuleCapsule:
+                batched = Batched::CapsuleCapsule;
+                break;
+            case PairKernel::BoxBox:
+                batched = Batched::BoxBox;
+                break;
+            default:
+                break;
+        }
+        if (batched != Batched::Count) {
+            scratch.batched[static_cast<int>(batched)].push_back(j);
+            continue;
+        }
+        const ContactPair& p = job.pair;
+        if (last == nullptr || p.a != last->a || p.b != last->b || p.aStatic != last->aStatic ||
+            p.bStatic != last->bStatic || p.childA != last->childA || p.childB != last->childB) {
+            const Motion<float> motionA = motionOf(storage, tables_, p, false);
+            const Motion<float> motionB = motionOf(storage, tables_, p, true);
+            margin = speculativeMargin<float>(params, motionA.v, motionA.w, motionA.reach, motionB.v, motionB.w,
+                                              motionB.reach);
+            a = posedSide(storage, shapes, p, false);
+            b = posedSide(storage, shapes, p, true);
+            last = &p;
+        }
+        collide(job.kernel, a, b, p.triangle, margin, hullAdjacency_, chunk.manifolds[j]);
+    }
+    for (int kernel = 0; kernel < static_cast<int>(Batched::Count); ++kernel)
+        if (!scratch.batched[kernel].empty())
+            collideBatched(static_cast<Batched>(kernel), scratch.batched[kernel], chunk, scratch, storage, shapes,
+                           tables_, params);
+
+    chunk.touching = 0;
+    chunk.points = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+        const int count = chunk.manifolds[j].pointCount;
+        chunk.touching += count > 0 ? 1u : 0u;
+        chunk.points += static_cast<std::uint32_t>(count);
     }
 }
 

@@ -1,7 +1,9 @@
 #pragma once
-// The narrow-phase stage: candidate pairs from the broad phase become contact manifolds. Pairs are bucketed by
-// shape-kind pair; each bucket runs one kernel over its pairs in parallel chunks (sphere-sphere in SIMD lanes),
-// and the manifolds come out in the candidates' canonical order whatever the thread count.
+// The narrow-phase stage: candidate pairs from the broad phase become contact manifolds. The candidates are cut into
+// fixed chunks that run in parallel; within a chunk the pairs are bucketed by shape-kind pair, and the buckets with a
+// batched kernel (sphere-sphere, sphere-box, sphere-capsule, capsule-capsule, and box-box's axis tests) run in SIMD
+// lanes on pose data gathered lane-wide, the rest one pair at a time. Every pair gets its own speculative margin.
+// The manifolds come out in the candidates' canonical order whatever the thread count.
 #include <cstdint>
 #include <memory>
 #include <unordered_map>
@@ -18,6 +20,7 @@ class TaskPool;
 struct HullAdjacency;
 
 inline constexpr std::uint16_t kNoChild = 0xFFFF;
+inline constexpr int kShapeKindCount = static_cast<int>(ShapeKind::Heightfield) + 1;
 
 /// The two bodies of a manifold, in the order the kernel saw them: A has the lower ShapeKind, so the normal
 /// points from A to B. Each side is a dense index into MovingBodies, or into StaticBodies when flagged static;
@@ -38,15 +41,11 @@ struct Contacts {
     std::vector<ContactPair> pairs;
     std::vector<Manifold> manifolds;
     std::uint32_t pointCount = 0;
-    /// Candidate pairs (or compound child pairs) whose shape kinds have no kernel yet (hull-triangle). They are
-    /// counted here and shown by the runner, never silently treated as apart.
-    std::uint32_t unsupportedPairs = 0;
 
     void clear() {
         pairs.clear();
         manifolds.clear();
         pointCount = 0;
-        unsupportedPairs = 0;
     }
 };
 
@@ -65,28 +64,79 @@ enum class PairKernel : std::uint8_t {
     SphereTriangle,
     CapsuleTriangle,
     BoxTriangle,
-    Unsupported,
+    HullTriangle,
     Count
 };
 
-/// The kernel for two shape kinds given in ascending order.
+/// The kernel for two shape kinds given in ascending order. Every pair that can reach the narrow phase has one:
+/// compounds are split into their children (spheres, boxes, capsules or hulls) and meshes and heightfields are
+/// static-only, so they meet only those four kinds.
 PairKernel pairKernel(ShapeKind lower, ShapeKind upper);
+
+/// Per shape slot, what job building and the batched kernels read (SoA, for SIMD gathers); refreshed every run.
+struct ShapeTables {
+    std::vector<ShapeKind> kind;
+    /// Box: half extents; sphere: (radius, 0, 0); capsule: (radius, half height, 0).
+    std::vector<float> sizeX, sizeY, sizeZ;
+    std::vector<float> reach;  ///< rotationReach (src/bounds.h)
+};
+
+/// What the stage needs besides the pairs.
+struct NarrowPhaseParams {
+    float margin = 0.02f;     ///< WorldSettings::contactMargin: points are reported this far apart even at rest
+    float dt = 1.0f / 60.0f;  ///< the step the contacts must cover (see speculative margins below)
+};
 
 class NarrowPhaseStage {
 public:
-    /// Manifolds for every candidate pair within `margin` (speculative points included).
+    /// Manifolds for every candidate pair within its speculative margin: points with depth >= -m, where for a pair
+    /// of bodies A and B
+    ///     m = margin + |vB - vA| dt + min(|wA| dt, 2) reachA + min(|wB| dt, 2) reachB
+    /// bounds how far their surfaces can approach each other during the step (reach: rotationReach of the body's
+    /// shape, src/bounds.h, which the broad phase's boxes are grown by as well; static bodies have no velocity). A
+    /// resting pair keeps the plain margin; a fast approach gets its points before the bodies meet, so the solver can
+    /// stop it in time.
     void run(const CandidatePairs& candidates, const BodyStorage& storage, const std::vector<Shape>& shapes,
-             float margin, TaskPool& pool, Contacts& out);
+             const NarrowPhaseParams& params, TaskPool& pool, Contacts& out);
+    /// The same with dt = 0: every pair gets the fixed margin (for callers that place bodies by hand).
+    void run(const CandidatePairs& candidates, const BodyStorage& storage, const std::vector<Shape>& shapes,
+             float margin, TaskPool& pool, Contacts& out) {
+        run(candidates, storage, shapes, NarrowPhaseParams{margin, 0.0f}, pool, out);
+    }
 
     NarrowPhaseStage();
     ~NarrowPhaseStage();
+    NarrowPhaseStage(const NarrowPhaseStage&) = delete;
+    NarrowPhaseStage& operator=(const NarrowPhaseStage&) = delete;
 
-private:
     struct Job {
         ContactPair pair;
-        PairKernel kernel = PairKernel::Unsupported;
+        PairKernel kernel = PairKernel::Count;  // always set when the job is made
     };
-    std::vector<Job> jobs_;
+    /// One parallel chunk of the candidates (fixed boundaries, in canonical order): its jobs and one manifold per
+    /// job, kept from step to step so that a step allocates nothing once sizes settle.
+    struct Chunk {
+        std::vector<Job> jobs;
+        std::vector<Manifold> manifolds;
+        std::uint32_t touching = 0;  ///< jobs with at least one point
+        std::uint32_t points = 0;
+        std::size_t offset = 0;  ///< where its touching jobs go in the output
+    };
+    struct Scratch;
+
+private:
+    void prepareShapes(const std::vector<Shape>& shapes);
+    void runChunk(Chunk& chunk, Scratch& scratch, const BodyStorage& storage, const std::vector<Shape>& shapes,
+                  const NarrowPhaseParams& params) const;
+
+    std::vector<Chunk> chunks_;
+    /// Per worker: index lists and SoA lanes of the batched kernels.
+    std::vector<std::unique_ptr<Scratch>> scratch_;
+    ShapeTables tables_;
+    /// pairKernel for every pair of kinds that can meet, indexed [lower][upper].
+    PairKernel kernels_[kShapeKindCount][kShapeKindCount];
+    /// Per shape slot: the hull whose adjacency is known to be in hullAdjacency_ (a cheap check per step).
+    std::vector<const ConvexHull*> knownHull_;
     /// Edge-face adjacency of every hull met so far (Gauss-map pruning needs it), built before the parallel work.
     /// Each entry keeps its hull alive, so a hull's address cannot be reused by another while it is a key.
     struct HullEntry {
@@ -94,12 +144,6 @@ private:
         std::unique_ptr<HullAdjacency> adjacency;
     };
     std::unordered_map<const ConvexHull*, HullEntry> hullAdjacency_;
-    std::vector<Manifold> perJob_;
-    std::vector<std::uint32_t> bucket_[static_cast<int>(PairKernel::Count)];
-    // SoA scratch for the batched sphere-sphere kernel.
-    std::vector<float> sphereIn_[8], sphereOut_[7];
-    std::vector<std::uint32_t> sphereFeature_;
-    std::vector<std::int32_t> sphereCount_;
 };
 
 }  // namespace rubble::detail

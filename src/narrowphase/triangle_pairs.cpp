@@ -1,8 +1,13 @@
-// Sphere-, capsule- and box-triangle contact kernels; the rules and feature ids are documented in the header.
+// Sphere-, capsule-, box- and hull-triangle contact kernels; the rules and feature ids are documented in the header.
 #include "narrowphase/triangle_pairs.h"
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
+
+#include "narrowphase/clip.h"
+#include "narrowphase/hull_pairs.h"
+#include "shapes/shape.h"
 
 namespace rubble::detail {
 namespace {
@@ -16,10 +21,18 @@ constexpr float kMinDistanceSq = 1e-12f;
 constexpr float kMinSegmentSq = 1e-12f;
 /// SAT hysteresis, as in box_box.h: a later axis must beat the current one by this fraction of |separation| ...
 constexpr float kAxisRelativeTolerance = 0.05f;
-/// ... plus this fraction of the size (largest box half extent or triangle edge).
+/// ... plus this fraction of the size (the larger of the body's -- largest box half extent, or largest hull vertex
+/// distance from its centroid -- and the longest triangle edge).
 constexpr float kAxisAbsoluteTolerance = 1e-4f;
 /// Triangle vertices within this fraction of the size of the deepest one along the normal share its feature.
 constexpr float kFeatureTolerance = 1e-4f;
+/// The hull kernel's clipping planes are pushed out by this fraction of the size (a few times the rounding of its
+/// inputs): a vertex on a shared boundary (a hull face coplanar with the triangle, parallel edges over each other)
+/// then stays a vertex instead of rounding into crossing points, which would also make its feature id flicker.
+constexpr float kClipSlack = 1e-6f;
+/// Hull contact candidates closer than this fraction of the size to a deeper one are dropped: an incident edge
+/// lying on a side plane crosses it right next to its own vertices, and such twins only add solver work.
+constexpr float kMergeDistance = 1e-4f;
 
 constexpr int kFeatureFace = 0;
 constexpr int featureEdge(int e) { return 1 + e; }
@@ -105,69 +118,87 @@ void addPoint(Manifold& out, Vec3 position, float depth, std::uint32_t feature) 
     p.feature = feature;
 }
 
-// ---- Polygon clipping with feature tracking ---------------------------------------------------------------------
+/// Contact points gathered before the reduction to four, in the kernel's frame.
+struct Candidates {
+    Vec3 position[kClipCapacity];  // on the triangle
+    float depth[kClipCapacity];
+    std::uint32_t feature[kClipCapacity];
+    int count = 0;
 
-constexpr int kMaxClip = 8;  // a quad or triangle clipped by at most 4 planes has at most 7 vertices
-
-struct ClipVertex {
-    Vec3 p;
-    std::uint8_t id;    ///< point feature (see header)
-    std::uint8_t edge;  ///< tag of the polygon edge from this vertex to the next
+    void add(Vec3 p, float d, std::uint32_t f) {
+        position[count] = p, depth[count] = d, feature[count] = f;
+        ++count;
+    }
 };
 
-/// Sutherland-Hodgman against dot(normal, x) <= offset. A crossing vertex gets id 0x20 | edge << 2 | plane; the
-/// polygon edge along the plane gets `planeTag`.
-int clipPolygon(const ClipVertex* in, int n, Vec3 normal, float offset, int plane, std::uint8_t planeTag,
-                ClipVertex* out) {
-    int m = 0;
-    for (int i = 0; i < n; ++i) {
-        const ClipVertex& a = in[i];
-        const ClipVertex& b = in[(i + 1) % n];
-        const float da = dot(normal, a.p) - offset, db = dot(normal, b.p) - offset;
-        if (da <= 0) out[m++] = a;
-        if ((da <= 0) != (db <= 0)) {
-            const float t = da / (da - db);
-            out[m++] = {a.p + (b.p - a.p) * t, std::uint8_t(0x20 | (a.edge << 2) | plane), da <= 0 ? planeTag : a.edge};
-        }
-    }
-    return m;
+/// Per-thread buffers of the box and hull kernels. Their element types initialise their members, so as locals they
+/// would clear kilobytes per call that the call mostly does not use (measured: a quarter of the box kernel's time).
+struct Scratch {
+    ClipVertex poly[kClipCapacity], tmp[kClipCapacity];
+    Vec3 planeNormals[kClipCapacity];
+    float planeOffsets[kClipCapacity];
+    Candidates cands;
+    std::vector<float> faceDots;  // hull: per face, its dot products with the triangle's edges and side directions
+};
+Scratch& scratch() {
+    thread_local Scratch s;
+    return s;
 }
 
-struct Candidate {
-    Vec3 position;  // on the triangle, box frame
-    float depth;
-    std::uint32_t feature;
-};
+/// Clips polygon `poly` (n vertices, capacity kClipCapacity) in place against the planes dot(normals[i], x) <=
+/// offsets[i], plane i numbered i for the point ids; returns the new count.
+int clipAgainst(ClipVertex* poly, int n, const Vec3* normals, const float* offsets, int planes) {
+    ClipVertex* tmp = scratch().tmp;
+    for (int p = 0; p < planes && n > 0; ++p) {
+        n = clipPolygon(poly, n, tmp, normals[p], offsets[p], p);
+        std::copy(tmp, tmp + n, poly);
+    }
+    return n;
+}
 
-/// Keeps at most 4 of `n` candidates: the deepest, the farthest from it, then the two that span the largest
-/// areas on either side of their line (Box2D / Bullet style manifold reduction).
-int reduceToFour(Candidate* c, int n, Vec3 normal) {
-    if (n <= 4) return n;
-    int i0 = 0;
-    for (int i = 1; i < n; ++i)
-        if (c[i].depth > c[i0].depth) i0 = i;
-    int i1 = -1;
-    float far = -1;
-    for (int i = 0; i < n; ++i) {
-        const Vec3 d = c[i].position - c[i0].position;
-        if (i != i0 && dot(d, d) > far) far = dot(d, d), i1 = i;
+/// Drops candidates within `tol` of a deeper one (of an equally deep earlier one on ties). The deepest survives, and
+/// every dropped point lies within a few `tol` of a kept one.
+void mergeNearDuplicates(Candidates& c, float tol) {
+    const float tol2 = tol * tol;
+    bool drop[kClipCapacity] = {};
+    for (int i = 0; i < c.count; ++i)
+        for (int j = 0; j < c.count && !drop[i]; ++j) {
+            const Vec3 d = c.position[i] - c.position[j];
+            drop[i] = j != i && dot(d, d) <= tol2 && (c.depth[j] > c.depth[i] || (c.depth[j] == c.depth[i] && j < i));
+        }
+    int kept = 0;
+    for (int i = 0; i < c.count; ++i) {
+        if (drop[i]) continue;
+        c.position[kept] = c.position[i], c.depth[kept] = c.depth[i], c.feature[kept] = c.feature[i];
+        ++kept;
     }
-    int i2 = -1, i3 = -1;
-    float most = -INFINITY, least = INFINITY;
-    const Vec3 base = c[i1].position - c[i0].position;
-    for (int i = 0; i < n; ++i) {
-        if (i == i0 || i == i1) continue;
-        const float area = dot(cross(base, c[i].position - c[i0].position), normal);
-        if (area > most) most = area, i2 = i;
-        if (area < least) least = area, i3 = i;
-    }
-    if (i3 == i2) {  // only possible with a single remaining candidate
-        for (int i = 0; i < n; ++i)
-            if (i != i0 && i != i1 && i != i2) i3 = i;
-    }
-    const Candidate kept[4] = {c[i0], c[i1], c[i2], c[i3]};
-    for (int i = 0; i < 4; ++i) c[i] = kept[i];
-    return 4;
+    c.count = kept;
+}
+
+/// Writes at most 4 of the candidates (the shared reduction: deepest first, then the largest area in the plane
+/// across `n`) to `out`, moved from the kernel's frame to the world by `pose`.
+int emitReduced(const Candidates& c, Vec3 n, const Transform& pose, Manifold& out) {
+    Vec3 u, v;
+    planeBasis(n, u, v);
+    int chosen[4];
+    const int count = reduceContactPoints(c.position, c.depth, c.count, u, v, chosen);
+    out.normal = rotate(pose.rotation, n);
+    for (int i = 0; i < count; ++i)
+        addPoint(out, rotate(pose.rotation, c.position[chosen[i]]) + pose.position, c.depth[chosen[i]],
+                 c.feature[chosen[i]]);
+    return out.pointCount;
+}
+
+/// The triangle feature a face axis of the body touches: the triangle vertices within `tol` of the lowest along n
+/// (3 = face, 2 = edge, 1 = vertex).
+int featureAlong(const Vec3 (&t)[3], Vec3 n, float tol) {
+    const float p[3] = {dot(n, t[0]), dot(n, t[1]), dot(n, t[2])};
+    const float lo = std::min({p[0], p[1], p[2]});
+    int count = 0, first = -1, last = -1;
+    for (int i = 0; i < 3; ++i)
+        if (p[i] <= lo + tol) ++count, last = i, first = first < 0 ? i : first;
+    // Two vertices i < j: edge i when j = i + 1, edge 2 for the pair (0, 2).
+    return count == 3 ? kFeatureFace : (count == 1 ? featureVertex(first) : featureEdge(last == first + 1 ? first : 2));
 }
 
 float component(Vec3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
@@ -352,36 +383,37 @@ int collideBoxTriangle(const Transform& boxPose, Vec3 halfExtents, const Triangl
         if (sep > margin) return 0;
         if (better(sep)) best = sep, n = dir, kind = Axis::BoxFace, boxAxis = k;
     }
+    // Of an edge axis only the direction in which triangle edge j is the triangle's support towards the box (where
+    // the pair makes a face of the Minkowski difference: -dir on the half circle of the triangle's Gauss map through
+    // edge j's outward side) can be the contact's; the box edge along i supports every direction orthogonal to i.
+    // The other direction still proves separation, but its edge points are not the contact, and taking it dropped
+    // or under-reported deep contacts.
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
-            const Vec3 L = cross(axisVector(i, 1), edges[j]);
+            Vec3 L = cross(axisVector(i, 1), edges[j]);
             const float len2 = dot(L, L);
             if (len2 <= kTriangleEdgeParallelEpsilon * kTriangleEdgeParallelEpsilon * dot(edges[j], edges[j])) continue;
+            L = L / std::sqrt(len2);
             Vec3 dir;
-            const float sep = separation(L / std::sqrt(len2), dir);
-            if (sep > margin) return 0;
+            if (separation(L, dir) > margin) return 0;
+            const float side = dot(L, cross(edges[j], faceN));  // outward side of edge j: t is counter-clockwise
+            if (side == 0) continue;
+            dir = side < 0 ? L : -L;
+            const float lo = std::min({dot(dir, t[0]), dot(dir, t[1]), dot(dir, t[2])});
+            const float sep = lo - boxRadius(dir);
             if (better(sep)) best = sep, n = dir, kind = Axis::EdgeEdge, boxAxis = i, triEdge = j;
         }
     }
 
     // Ghost rule: the triangle feature the contact lies on must be active to keep a non-face normal.
     if (kind != Axis::TriangleFace) {
-        int feature = featureEdge(triEdge);
-        if (kind == Axis::BoxFace) {
-            const float p[3] = {dot(n, t[0]), dot(n, t[1]), dot(n, t[2])};
-            const float lo = std::min({p[0], p[1], p[2]}), tol = kFeatureTolerance * size;
-            int count = 0, first = -1, last = -1;
-            for (int i = 0; i < 3; ++i)
-                if (p[i] <= lo + tol) ++count, last = i, first = first < 0 ? i : first;
-            // Two vertices i < j: edge i when j = i + 1, edge 2 for the pair (0, 2).
-            feature = count == 3 ? kFeatureFace
-                                 : (count == 1 ? featureVertex(first) : featureEdge(last == first + 1 ? first : 2));
-        }
+        const int feature = kind == Axis::BoxFace ? featureAlong(t, n, kFeatureTolerance * size) : featureEdge(triEdge);
         if (!featureActive(feature, activeEdges)) kind = Axis::TriangleFace, n = toFace;
     }
 
-    Candidate cands[kMaxClip];
-    int count = 0;
+    Scratch& sc = scratch();
+    Candidates& cands = sc.cands;
+    cands.count = 0;
     if (kind == Axis::TriangleFace) {
         // Incident box face: the one facing the triangle; clipped by the triangle's side planes.
         const float nc[3] = {n.x, n.y, n.z};
@@ -391,39 +423,52 @@ int collideBoxTriangle(const Transform& boxPose, Vec3 halfExtents, const Triangl
         const float s = nc[k] < 0 ? -1.0f : 1.0f;
         const int u = (k + 1) % 3, w = (k + 2) % 3;
         const float hk = component(h, k), hu = component(h, u), hw = component(h, w);
-        ClipVertex poly[kMaxClip], tmp[kMaxClip];
+        ClipVertex* poly = sc.poly;
         poly[0] = {withComponents(k, s * hk, u, hu, w, hw), 0, 0};
         poly[1] = {withComponents(k, s * hk, u, -hu, w, hw), 1, 1};
         poly[2] = {withComponents(k, s * hk, u, -hu, w, -hw), 2, 2};
         poly[3] = {withComponents(k, s * hk, u, hu, w, -hw), 3, 3};
-        int m = 4;
-        for (int e = 0; e < 3 && m > 0; ++e) {
-            const Vec3 side = cross(edges[e], faceN);  // outward: t is counter-clockwise about faceN
-            m = clipPolygon(poly, m, side, dot(side, t[e]), e, std::uint8_t(4 + e), tmp);
-            std::copy(tmp, tmp + m, poly);
+        Vec3 sides[3];
+        float offsets[3];
+        for (int e = 0; e < 3; ++e) {
+            sides[e] = cross(edges[e], faceN);  // outward: t is counter-clockwise about faceN
+            offsets[e] = dot(sides[e], t[e]);
         }
+        const int m = clipAgainst(poly, 4, sides, offsets, 3);
         const std::uint32_t face = std::uint32_t(2 * k + (s < 0 ? 1 : 0));
         for (int i = 0; i < m; ++i) {
             const float depth = dot(poly[i].p - t[0], n);
-            if (depth >= -margin) cands[count++] = {poly[i].p - n * depth, depth, face << 8 | poly[i].id};
+            if (depth >= -margin) cands.add(poly[i].p - n * depth, depth, face << 16 | poly[i].id);
+        }
+        if (cands.count == 0) {
+            // The face lies beside the triangle while a corner reaches it: that corner (the deepest) alone.
+            const float su = component(n, u) < 0 ? -1.0f : 1.0f, sw = component(n, w) < 0 ? -1.0f : 1.0f;
+            const Vec3 corner = withComponents(k, s * hk, u, su * hu, w, sw * hw);
+            const float depth = dot(corner - t[0], n);
+            const std::uint32_t id = su > 0 ? (sw > 0 ? 0u : 3u) : (sw > 0 ? 1u : 2u);
+            if (depth >= -margin) cands.add(closestOnTriangle(corner, t[0], t[1], t[2]).point, depth, face << 16 | id);
         }
     } else if (kind == Axis::BoxFace) {
         // Reference face of the box: the triangle clipped to the face's four side planes.
         const int k = boxAxis, u = (k + 1) % 3, w = (k + 2) % 3;
         const float s = component(n, k) < 0 ? -1.0f : 1.0f;
-        ClipVertex poly[kMaxClip], tmp[kMaxClip];
-        for (int i = 0; i < 3; ++i) poly[i] = {t[i], std::uint8_t(i), std::uint8_t(i)};
-        int m = 3;
+        ClipVertex* poly = sc.poly;
+        for (int i = 0; i < 3; ++i) poly[i] = {t[i], std::uint16_t(i), std::uint16_t(i)};
         const Vec3 sides[4] = {axisVector(u, 1), axisVector(u, -1), axisVector(w, 1), axisVector(w, -1)};
         const float offsets[4] = {component(h, u), component(h, u), component(h, w), component(h, w)};
-        for (int p = 0; p < 4 && m > 0; ++p) {
-            m = clipPolygon(poly, m, sides[p], offsets[p], p, std::uint8_t(3 + p), tmp);
-            std::copy(tmp, tmp + m, poly);
-        }
+        const int m = clipAgainst(poly, 3, sides, offsets, 4);
         const std::uint32_t face = std::uint32_t(2 * k + (s < 0 ? 1 : 0));
         for (int i = 0; i < m; ++i) {
             const float depth = component(h, k) - s * component(poly[i].p, k);
-            if (depth >= -margin) cands[count++] = {poly[i].p, depth, 1u << 30 | face << 8 | poly[i].id};
+            if (depth >= -margin) cands.add(poly[i].p, depth, 1u << 30 | face << 16 | poly[i].id);
+        }
+        if (cands.count == 0) {
+            // The triangle lies beside the face while one of its vertices reaches it: that vertex (the deepest).
+            int d = 0;
+            for (int i = 1; i < 3; ++i)
+                if (dot(n, t[i]) < dot(n, t[d])) d = i;
+            const float depth = component(h, k) - s * component(t[d], k);
+            if (depth >= -margin) cands.add(t[d], depth, 1u << 30 | face << 16 | std::uint32_t(d));
         }
     } else {
         // Edge-edge: the box edge along boxAxis farthest along n against triangle edge triEdge.
@@ -437,14 +482,194 @@ int collideBoxTriangle(const Transform& boxPose, Vec3 halfExtents, const Triangl
         const Vec3 onBox = boxStart + boxDir * sb, onTri = t[triEdge] + edges[triEdge] * st;
         const float depth = dot(onBox - onTri, n);
         const std::uint32_t boxEdge = std::uint32_t(4 * i + (su < 0 ? 1 : 0) + (sw < 0 ? 2 : 0));
-        if (depth >= -margin) cands[count++] = {onTri, depth, 2u << 30 | boxEdge << 8 | std::uint32_t(triEdge)};
+        if (depth >= -margin) cands.add(onTri, depth, 2u << 30 | boxEdge << 8 | std::uint32_t(triEdge));
     }
-    if (count == 0) return 0;
-    count = reduceToFour(cands, count, n);
-    out.normal = rotate(boxPose.rotation, n);
-    for (int i = 0; i < count; ++i)
-        addPoint(out, rotate(boxPose.rotation, cands[i].position) + boxPose.position, cands[i].depth, cands[i].feature);
-    return out.pointCount;
+    if (cands.count == 0) return 0;
+    return emitReduced(cands, n, boxPose, out);
+}
+
+// ---- Hull -------------------------------------------------------------------------------------------------------
+
+int collideHullTriangle(const ConvexHull& hull, const HullAdjacency& adjacency, const Transform& hullPose,
+                        const TriangleVertices& tri, std::uint8_t activeEdges, float margin, Manifold& out) {
+    out.pointCount = 0;
+    // Hull frame, relative to the hull's origin.
+    const Quat inv = conjugate(hullPose.rotation);
+    const Vec3 t[3] = {rotate(inv, tri[0] - hullPose.position), rotate(inv, tri[1] - hullPose.position),
+                       rotate(inv, tri[2] - hullPose.position)};
+    Vec3 faceN;
+    if (!faceNormal(t[1] - t[0], t[2] - t[0], faceN)) return 0;
+    if (!isFinite(t[0]) || !isFinite(t[1]) || !isFinite(t[2])) return 0;
+    const Vec3* V = hull.vertices.data();
+    const int vertexCount = static_cast<int>(hull.vertices.size());
+    const Vec3* N = hull.faceNormals.data();
+    const float* offsets = hull.faceOffsets.data();
+    const int faceCount = static_cast<int>(hull.faceNormals.size());
+    const int edgeCount = static_cast<int>(adjacency.edges.size());
+    if (vertexCount == 0 || faceCount == 0) return 0;
+    const Vec3 edges[3] = {t[1] - t[0], t[2] - t[1], t[0] - t[2]};
+    const float size =
+        std::max(adjacency.size,
+                 std::sqrt(std::max({dot(edges[0], edges[0]), dot(edges[1], edges[1]), dot(edges[2], edges[2])})));
+    auto support = [&](Vec3 d) {  // index of the hull vertex farthest along d
+        int best = 0;
+        float hi = dot(d, V[0]);
+        for (int i = 1; i < vertexCount; ++i) {
+            const float x = dot(d, V[i]);
+            if (x > hi) hi = x, best = i;
+        }
+        return best;
+    };
+
+    // Each family's best axis, then the hysteresis of hull_pairs.h between families (not within one, where it
+    // would only make the choice depend on the hull's face and edge order): the triangle face, a hull face only if
+    // clearly better, an edge pair only if clearly better than the chosen face.
+    // The triangle face counts on the side of the hull's centre (two-sided triangles).
+    const Vec3 toFace = dot(faceN, adjacency.interior - t[0]) >= 0 ? -faceN : faceN;
+    const int deepestOnFace = support(toFace);
+    const float sepT = dot(toFace, t[0] - V[deepestOnFace]);
+    if (sepT > margin) return 0;
+    // Face axes of the hull: the lowest triangle vertex above the face plane.
+    float sepH = -INFINITY;
+    int hullFace = 0;
+    for (int f = 0; f < faceCount; ++f) {
+        const float sep = std::min({dot(N[f], t[0]), dot(N[f], t[1]), dot(N[f], t[2])}) - offsets[f];
+        if (sep > margin) return 0;
+        if (sep > sepH) sepH = sep, hullFace = f;
+    }
+    // Edge pairs. The triangle's Gauss map (negated for the Minkowski difference hull - triangle) joins -n and n, for
+    // edge j, by the half circle orthogonal to e_j through -s_j, s_j its outward side direction. Hull edge arc (a, b)
+    // crosses that great circle where dot(x, e_j) = 0, at x ~ |be| a + |ae| b (ae = dot(a, e_j), be = dot(b, e_j) of
+    // opposite signs); the pair makes a face of the difference when that point is on the -s_j half.
+    Vec3 sides[3];
+    for (int j = 0; j < 3; ++j) sides[j] = cross(edges[j], faceN);  // outward: t is counter-clockwise about faceN
+    Scratch& sc = scratch();
+    std::vector<float>& faceDots = sc.faceDots;  // per hull face: dot with e_0..e_2, then with s_0..s_2
+    if (faceDots.size() < 6 * static_cast<std::size_t>(faceCount))
+        faceDots.resize(6 * static_cast<std::size_t>(faceCount));
+    for (int f = 0; f < faceCount; ++f) {
+        float* d = &faceDots[6 * static_cast<std::size_t>(f)];
+        for (int j = 0; j < 3; ++j) d[j] = dot(N[f], edges[j]), d[3 + j] = dot(N[f], sides[j]);
+    }
+    constexpr float kParallel2 = kTriangleEdgeParallelEpsilon * kTriangleEdgeParallelEpsilon;
+    float sepE = -INFINITY;
+    int hullEdge = -1, triEdge = 0;
+    Vec3 axisE{};
+    for (int i = 0; i < edgeCount; ++i) {
+        const HullEdge& e = adjacency.edges[i];
+        const float* da = &faceDots[6 * static_cast<std::size_t>(e.face0)];
+        const float* db = &faceDots[6 * static_cast<std::size_t>(e.face1)];
+        const Vec3 p = V[e.v0], d = V[e.v1] - p;
+        for (int j = 0; j < 3; ++j) {
+            const float ae = da[j], be = db[j];
+            if (!(ae * be < 0) || !(std::abs(be) * da[3 + j] + std::abs(ae) * db[3 + j] < 0)) continue;
+            Vec3 L = cross(d, edges[j]);
+            const float len2 = dot(L, L);
+            if (len2 <= kParallel2 * dot(d, d) * dot(edges[j], edges[j])) continue;
+            if (dot(L, p - adjacency.interior) < 0) L = -L;  // outward from the hull, i.e. towards the triangle
+            L = L / std::sqrt(len2);
+            const float sep = dot(L, t[j] - p);
+            if (sep > margin) return 0;
+            if (sep > sepE) sepE = sep, hullEdge = i, triEdge = j, axisE = L;
+        }
+    }
+    auto clearlyBetter = [&](float candidate, float current) {
+        return candidate > current + kAxisRelativeTolerance * std::abs(current) + kAxisAbsoluteTolerance * size;
+    };
+    enum class Axis { TriangleFace, HullFace, EdgeEdge };
+    Axis kind = Axis::TriangleFace;
+    float best = sepT;
+    Vec3 n = toFace;
+    if (clearlyBetter(sepH, best)) kind = Axis::HullFace, best = sepH, n = N[hullFace];
+    if (hullEdge >= 0 && clearlyBetter(sepE, best)) kind = Axis::EdgeEdge, n = axisE;
+
+    // Ghost rule: the triangle feature the contact lies on must be active to keep a non-face normal.
+    if (kind != Axis::TriangleFace) {
+        const int feature =
+            kind == Axis::HullFace ? featureAlong(t, n, kFeatureTolerance * size) : featureEdge(triEdge);
+        if (!featureActive(feature, activeEdges)) kind = Axis::TriangleFace, n = toFace;
+    }
+
+    Candidates& cands = sc.cands;
+    cands.count = 0;
+    if (kind == Axis::TriangleFace) {
+        // Incident face: among the faces through the deepest vertex, the most aligned with n (the most aligned face
+        // overall can lie beside the triangle on general hulls); clipped by the triangle's side planes.
+        int fi = -1;
+        std::uint32_t deepestIndex = 0x7FFF;
+        float align = -INFINITY;
+        for (int f = 0; f < faceCount; ++f) {
+            const float c = dot(N[f], n);
+            if (c <= align) continue;
+            for (std::uint32_t k = hull.faceStart[f]; k < hull.faceStart[f + 1]; ++k)
+                if (hull.faceVertices[k] == static_cast<std::uint32_t>(deepestOnFace)) {
+                    align = c, fi = f, deepestIndex = k - hull.faceStart[f];
+                    break;
+                }
+        }
+        if (fi < 0) fi = 0;  // only for a malformed hull whose support vertex is on no face
+        ClipVertex* poly = sc.poly;
+        int m = 0;
+        for (std::uint32_t k = hull.faceStart[fi]; k < hull.faceStart[fi + 1] && m < kClipCapacity; ++k, ++m)
+            poly[m] = {V[hull.faceVertices[k]], static_cast<std::uint16_t>(m), static_cast<std::uint16_t>(m)};
+        float sideOffsets[3];
+        for (int j = 0; j < 3; ++j) sideOffsets[j] = dot(sides[j], t[j]) + kClipSlack * size * length(sides[j]);
+        m = clipAgainst(poly, m, sides, sideOffsets, 3);
+        const std::uint32_t face = (static_cast<std::uint32_t>(fi) & 0x3FFFu) << 16;
+        for (int k = 0; k < m; ++k) {
+            const float depth = dot(poly[k].p - t[0], n);
+            if (depth >= -margin) cands.add(poly[k].p - n * depth, depth, face | poly[k].id);
+        }
+        if (cands.count == 0) {
+            // Nothing of the face lies over the triangle within the margin while the hull reaches it: the deepest
+            // vertex alone, over its closest triangle point (the SAT put it within the margin of the plane).
+            const Vec3 v = V[deepestOnFace];
+            const float depth = dot(v - t[0], n);
+            if (depth >= -margin) cands.add(closestOnTriangle(v, t[0], t[1], t[2]).point, depth, face | deepestIndex);
+        }
+    } else if (kind == Axis::HullFace) {
+        // Reference face of the hull: the triangle clipped to the face's side planes.
+        const std::uint32_t s0 = hull.faceStart[hullFace], s1 = hull.faceStart[hullFace + 1];
+        const int planes = std::min(static_cast<int>(s1 - s0), kClipCapacity);
+        Vec3* normals = sc.planeNormals;
+        float* planeOffsets = sc.planeOffsets;
+        for (int k = 0; k < planes; ++k) {
+            const std::uint32_t at = s0 + static_cast<std::uint32_t>(k);
+            const Vec3 p0 = V[hull.faceVertices[at]], p1 = V[hull.faceVertices[at + 1 == s1 ? s0 : at + 1]];
+            normals[k] = cross(p1 - p0, n);  // outward: hull faces are counter-clockwise from outside
+            planeOffsets[k] = dot(normals[k], p0) + kClipSlack * size * length(normals[k]);
+        }
+        ClipVertex* poly = sc.poly;
+        for (int i = 0; i < 3; ++i) poly[i] = {t[i], std::uint16_t(i), std::uint16_t(i)};
+        const int m = clipAgainst(poly, 3, normals, planeOffsets, planes);
+        const std::uint32_t face = 1u << 30 | (static_cast<std::uint32_t>(hullFace) & 0x3FFFu) << 16;
+        for (int k = 0; k < m; ++k) {
+            const float depth = offsets[hullFace] - dot(n, poly[k].p);
+            if (depth >= -margin) cands.add(poly[k].p, depth, face | poly[k].id);
+        }
+        if (cands.count == 0) {
+            // The triangle lies beside the face while one of its vertices reaches it: that vertex (the deepest).
+            int d = 0;
+            for (int i = 1; i < 3; ++i)
+                if (dot(n, t[i]) < dot(n, t[d])) d = i;
+            const float depth = offsets[hullFace] - dot(n, t[d]);
+            if (depth >= -margin) cands.add(t[d], depth, face | std::uint32_t(d));
+        }
+    } else {
+        // Edge-edge: one point, the closest points of the two edges. Both edges are orthogonal to n, so its depth is
+        // the SAT's whatever the clamping: the pair never drops out here.
+        const HullEdge& e = adjacency.edges[hullEdge];
+        const Vec3 p = V[e.v0], d = V[e.v1] - p;
+        float sh, st;
+        closestSegments(p, d, t[triEdge], edges[triEdge], sh, st);
+        const Vec3 onTri = t[triEdge] + edges[triEdge] * st;
+        const float depth = dot(p + d * sh - onTri, n);
+        const std::uint32_t id = 2u << 30 | (static_cast<std::uint32_t>(hullEdge) & 0xFFFFFFFu) << 2;
+        if (depth >= -margin) cands.add(onTri, depth, id | static_cast<std::uint32_t>(triEdge));
+    }
+    if (cands.count == 0) return 0;
+    mergeNearDuplicates(cands, kMergeDistance * size);
+    return emitReduced(cands, n, hullPose, out);
 }
 
 }  // namespace rubble::detail

@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <numbers>
 #include <random>
 #include <set>
@@ -547,6 +548,89 @@ TEST(BoxBox, RestingCubeFarFromOrigin) {
     ASSERT_EQ(m.pointCount, 4);
     for (int k = 0; k < 4; ++k) EXPECT_NEAR(m.points[k].depth, d, 1e-6f);
     EXPECT_LT(angleBetween(m.normal, {0, 1, 0}), 1e-6f);
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// The batched form: axis tests in SIMD lanes, clipping per pair.
+
+TEST(BoxBox, BatchedGivesExactlyThePerPairManifolds) {
+    // Resting, edge-on, deep, barely touching and separated pairs mixed in one batch, each with its own margin, and
+    // batch lengths that leave a scalar tail: every manifold must equal collideBoxes' bit for bit (normal, points,
+    // depths, feature ids), so the stage's results do not depend on which path a pair took.
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<float> unit(-1, 1), frac(0, 1);
+    std::vector<Box> as, bs;
+    std::vector<float> margins;
+    for (int n = 0; n < 1000; ++n) {
+        Box a, b;
+        switch (n % 4) {
+            case 0:  // resting on a ground box, slightly tilted
+                a = ground();
+                b = unitCube({2 * unit(rng), 0.99f + 0.02f * frac(rng), 2 * unit(rng)},
+                             Quat::fromAxisAngle({unit(rng), 0, unit(rng)}, 1e-3f * unit(rng)) *
+                                 Quat::fromAxisAngle({0, 1, 0}, kPi * unit(rng)));
+                break;
+            case 1:  // stacked cubes, exactly aligned or yawed
+                a = unitCube({0, 0, 0});
+                b = unitCube({0.3f * unit(rng), 1.0f - 0.01f * frac(rng), 0.3f * unit(rng)},
+                             n % 8 == 1 ? Quat{} : Quat::fromAxisAngle({0, 1, 0}, unit(rng)));
+                break;
+            default:  // random sizes and rotations, overlapping, touching or apart
+                a = {{{unit(rng), unit(rng), unit(rng)}, randomRotation(rng)}, randomHalf(rng)};
+                b = {{a.pose.position + Vec3{unit(rng), unit(rng), unit(rng)} * 1.2f, randomRotation(rng)},
+                     randomHalf(rng)};
+                break;
+        }
+        as.push_back(a);
+        bs.push_back(b);
+        margins.push_back(n % 3 == 0 ? 0.0f : 0.3f * frac(rng));
+    }
+    std::vector<float> soa[21];
+    for (std::size_t k = 0; k < as.size(); ++k) {
+        const float values[21] = {as[k].pose.position.x, as[k].pose.position.y, as[k].pose.position.z,
+                                  as[k].pose.rotation.x, as[k].pose.rotation.y, as[k].pose.rotation.z,
+                                  as[k].pose.rotation.w, as[k].half.x,          as[k].half.y,
+                                  as[k].half.z,          bs[k].pose.position.x, bs[k].pose.position.y,
+                                  bs[k].pose.position.z, bs[k].pose.rotation.x, bs[k].pose.rotation.y,
+                                  bs[k].pose.rotation.z, bs[k].pose.rotation.w, bs[k].half.x,
+                                  bs[k].half.y,          bs[k].half.z,          margins[k]};
+        for (int f = 0; f < 21; ++f) soa[f].push_back(values[f]);
+    }
+    const BoxPairs in{soa[0].data(),  soa[1].data(),  soa[2].data(),  soa[3].data(),  soa[4].data(),  soa[5].data(),
+                      soa[6].data(),  soa[7].data(),  soa[8].data(),  soa[9].data(),  soa[10].data(), soa[11].data(),
+                      soa[12].data(), soa[13].data(), soa[14].data(), soa[15].data(), soa[16].data(), soa[17].data(),
+                      soa[18].data(), soa[19].data(), soa[20].data()};
+    int contacts = 0, edges = 0, separated = 0;
+    for (const std::size_t n : {as.size(), std::size_t{37}, std::size_t{5}}) {
+        std::vector<Manifold> batched(n), scalar(n);
+        collideBoxesBatch(in, n, batched.data());
+        collideBoxesBatchScalar(in, n, scalar.data());
+        for (std::size_t k = 0; k < n; ++k) {
+            Manifold one;
+            collideBoxes(as[k].pose, as[k].half, bs[k].pose, bs[k].half, margins[k], one);
+            for (const Manifold* m : {&batched[k], &scalar[k]}) {
+                ASSERT_EQ(m->pointCount, one.pointCount) << "pair " << k;
+                if (one.pointCount == 0) continue;
+                EXPECT_EQ(std::memcmp(&m->normal, &one.normal, sizeof(Vec3)), 0) << "pair " << k;
+                for (int p = 0; p < one.pointCount; ++p) {
+                    EXPECT_EQ(std::memcmp(&m->points[p].position, &one.points[p].position, sizeof(Vec3)), 0);
+                    EXPECT_EQ(std::memcmp(&m->points[p].depth, &one.points[p].depth, sizeof(float)), 0);
+                    EXPECT_EQ(m->points[p].feature, one.points[p].feature) << "pair " << k;
+                }
+            }
+            if (n != as.size()) continue;
+            if (one.pointCount == 0)
+                ++separated;
+            else if (one.points[0].feature >> kBoxFeatureKindShift == kBoxFeatureEdgeEdge)
+                ++edges;
+            else
+                ++contacts;
+        }
+    }
+    // The mix must exercise every path.
+    EXPECT_GT(contacts, 300);
+    EXPECT_GT(edges, 20);
+    EXPECT_GT(separated, 50);
 }
 
 }  // namespace

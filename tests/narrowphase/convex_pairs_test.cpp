@@ -412,6 +412,56 @@ TEST(ConvexPairs, BatchedSphereBoxesMatchScalarBitForBit) {
     }
 }
 
+TEST(ConvexPairs, BatchedKernelsTakeEachPairsOwnMargin) {
+    // The stage's speculative margins: each pair's margin from the batch's array, in lanes and in the tail, exactly
+    // as the per-pair kernel with that margin; and the margin decides (pairs apart by more than the uniform margin
+    // but within their own are reported).
+    std::mt19937 rng(15);
+    std::uniform_real_distribution<float> marginOf(0.0f, 0.6f);
+    SoA3 a(kBatch), ah(kBatch), b(kBatch), bh(kBatch);
+    std::vector<float> ra(kBatch), rb(kBatch), margins(kBatch);
+    for (std::size_t i = 0; i < kBatch; ++i) {
+        const CapsuleSegment ca =
+            capsuleSegmentOf({randomPoint(rng, 1.5f), randomRotation(rng)}, randomSize(rng), 0.5f * randomSize(rng));
+        const CapsuleSegment cb =
+            capsuleSegmentOf({randomPoint(rng, 1.5f), randomRotation(rng)}, randomSize(rng), 0.5f * randomSize(rng));
+        a.set(i, ca.center), ah.set(i, ca.halfAxis), ra[i] = ca.radius;
+        b.set(i, cb.center), bh.set(i, cb.halfAxis), rb[i] = cb.radius;
+        margins[i] = marginOf(rng);
+    }
+    int beyondUniform = 0;
+    {
+        SpherePairs in{a.x.data(), a.y.data(), a.z.data(), ra.data(), b.x.data(), b.y.data(), b.z.data(), rb.data()};
+        in.margin = margins.data();
+        Outputs wide(kBatch), scalar(kBatch);
+        collideSpheresBatch(in, kBatch, kMargin, wide.view());
+        collideSpheresBatchScalar(in, kBatch, kMargin, scalar.view());
+        expectSame(wide, scalar, false);
+        for (std::size_t i = 0; i < kBatch; ++i) {
+            Manifold m;
+            const int n = collideSpheres(a.get(i), ra[i], b.get(i), rb[i], margins[i], m);
+            expectManifoldMatches(m, n, wide, i);
+            beyondUniform += n > 0 && m.points[0].depth < -kMargin;
+        }
+    }
+    {
+        CapsulePairs in{a.x.data(), a.y.data(), a.z.data(), ah.x.data(), ah.y.data(), ah.z.data(), ra.data(),
+                        b.x.data(), b.y.data(), b.z.data(), bh.x.data(), bh.y.data(), bh.z.data(), rb.data()};
+        in.margin = margins.data();
+        Outputs wide(kBatch), scalar(kBatch);
+        collideCapsulesBatch(in, kBatch, kMargin, wide.view());
+        collideCapsulesBatchScalar(in, kBatch, kMargin, scalar.view());
+        expectSame(wide, scalar, true);
+        for (std::size_t i = 0; i < kBatch; ++i) {
+            Manifold m;
+            const int n = collideCapsules({a.get(i), ah.get(i), ra[i]}, {b.get(i), bh.get(i), rb[i]}, margins[i], m);
+            expectManifoldMatches(m, n, wide, i);
+            beyondUniform += n > 0 && m.points[0].depth < -kMargin;
+        }
+    }
+    EXPECT_GT(beyondUniform, 20);
+}
+
 // ---- Degenerate and hand-made cases --------------------------------------------------------------------------
 
 TEST(ConvexPairs, CoincidentSpheresPushAlongPlusY) {
