@@ -184,6 +184,7 @@ BodyId World::createBody(const BodyDef& def) {
     if (def.type == BodyType::Static && (def.linearVelocity != Vec3{} || def.angularVelocity != Vec3{}))
         fail(kWhere, "a static body cannot have a velocity (use a kinematic body to move it)");
 
+    w.queries.bodiesChanged();
     std::uint32_t i;
     if (def.type == BodyType::Static) {
         const BodyId id = w.bodies.allocate(BodySet::Static, i);
@@ -236,6 +237,7 @@ void World::destroyBody(BodyId id) {
     w.shapeUsers[shape] -= 1;
     if (slot.set == BodySet::Static) w.broadPhase.staticRemoved(id.index);
     w.bodies.release(id);
+    w.queries.bodiesChanged();
     w.effectsDirty = true;
 }
 
@@ -351,6 +353,7 @@ void World::setTransform(BodyId id, Vec3 position, Quat orientation) {
     const BodySlot& s = w.slotOf(id, kWhere);
     requireFinite(kWhere, "position", position);
     const Quat q = requireUnit(kWhere, "orientation", orientation);
+    w.queries.bodiesChanged();
     const std::uint32_t i = s.dense;
     if (s.set == BodySet::Static) {
         auto& b = w.bodies.statics;

@@ -14,6 +14,7 @@
 #include "narrowphase/narrowphase_stage.h"
 #include "parallel.h"
 #include "profile.h"
+#include "query/query_cache.h"
 #include "rubble/world.h"
 #include "shapes/shape.h"
 #include "solver/contact_solver.h"
@@ -69,6 +70,8 @@ struct World::Impl {
     detail::ContactSolver contactSolver;
     std::vector<std::uint32_t> nonFinite;
     std::vector<BodyId> frozenReports;
+    /// The scene queries' trees (src/query/); told of every body added, removed or moved outside the step.
+    detail::QueryCache queries;
 
     Profile profile;
     std::uint64_t steps = 0;

@@ -1,12 +1,15 @@
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "rubble/body.h"
 #include "rubble/id.h"
 #include "rubble/math.h"
 #include "rubble/profile.h"
+#include "rubble/query.h"
 #include "rubble/settings.h"
 #include "rubble/shapes.h"
 
@@ -95,6 +98,42 @@ public:
     /// Height of the highest static mesh or heightfield surface straight below or above (x, z), if any.
     /// Used for the scenes' tunnelling figure.
     bool terrainHeightAt(float x, float z, float& height) const;
+
+    // -----------------------------------------------------------------------------------------------------------
+    // Queries (include/rubble/query.h, src/query/)
+    //
+    // Queries see every body at its current pose, bodies created, moved or removed since the last step included.
+    // The first query after such a change (or a step) brings the query trees up to date; every later one only
+    // reads them, so const queries may run on several threads at once, but never during a non-const call.
+    // Directions need not be unit length (they are normalised; zero is refused); maxDistance may be infinity.
+    // Results do not depend on the thread count; equal distances are ordered by body slot, then child, then
+    // triangle. Bad input (non-finite numbers, a zero direction, a negative distance or radius, a null or stale
+    // shape) throws rubble::Error naming the call, the field and the value.
+
+    /// Closest surface the ray enters within maxDistance, if any.
+    std::optional<RayHit> castRay(Vec3 origin, Vec3 direction, float maxDistance, const QueryFilter& filter = {}) const;
+    /// Appends every hit within maxDistance to `hits`, nearest first: one per solid body (per child of a compound)
+    /// the ray enters, and one per mesh or heightfield triangle it crosses. Returns how many it appended.
+    std::size_t castRayAll(Vec3 origin, Vec3 direction, float maxDistance, std::vector<RayHit>& hits,
+                           const QueryFilter& filter = {}) const;
+    /// First body a sphere touches when swept from `center` along `direction` (radius >= 0; 0 sweeps a point).
+    std::optional<ShapeCastHit> castSphere(Vec3 center, float radius, Vec3 direction, float maxDistance,
+                                           const QueryFilter& filter = {}) const;
+    /// First body a shape of this world (sphere, box, capsule, hull or compound) touches when swept without rotation
+    /// from `start` along `direction`. Sweeps that are not closed forms (those involving boxes, hulls, or a cast shape
+    /// other than a sphere) stop within 1e-4 m short of the contact, never past it beyond rounding.
+    std::optional<ShapeCastHit> castShape(ShapeId shape, const Transform& start, Vec3 direction, float maxDistance,
+                                          const QueryFilter& filter = {}) const;
+    /// Appends the bodies whose shape touches or overlaps the box [min, max], by slot; returns how many. Shapes are
+    /// tested exactly, not by their bounding boxes. Meshes and heightfields are surfaces, seen from both sides: a box
+    /// wholly inside a closed mesh does not overlap it. (QueryFilter's hitBackFaces and hitFromInside do not apply.)
+    std::size_t overlapAabb(Vec3 min, Vec3 max, std::vector<BodyId>& bodies, const QueryFilter& filter = {}) const;
+    /// Same for a sphere (radius >= 0).
+    std::size_t overlapSphere(Vec3 center, float radius, std::vector<BodyId>& bodies,
+                              const QueryFilter& filter = {}) const;
+    /// Same for a shape of this world (sphere, box, capsule, hull or compound) at `pose`.
+    std::size_t overlapShape(ShapeId shape, const Transform& pose, std::vector<BodyId>& bodies,
+                             const QueryFilter& filter = {}) const;
 
     struct Impl;
 

@@ -94,6 +94,13 @@ void BroadPhaseStage::staticRemoved(std::uint32_t slot) {
 
 std::uint32_t BroadPhaseStage::staticPrimitiveCount() const { return bvh_->primitiveCount(); }
 
+const StaticBvh& BroadPhaseStage::staticBvh(const BodyStorage& storage, const std::vector<Shape>& shapes,
+                                            TaskPool& pool) {
+    applyStaticEdits(storage, shapes, pool);
+    bvh_->commit(pool);
+    return *bvh_;
+}
+
 void BroadPhaseStage::applyStaticEdits(const BodyStorage& storage, const std::vector<Shape>& shapes, TaskPool& pool) {
     for (std::uint32_t slot : pendingRemoves_) bvh_->remove(slot);
     pendingRemoves_.clear();

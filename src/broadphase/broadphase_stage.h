@@ -48,6 +48,9 @@ public:
     /// The algorithm the last call used for moving-moving pairs.
     BroadPhaseKind lastKind() const { return lastKind_; }
     std::uint32_t staticPrimitiveCount() const;
+    /// The static BVH with the static edits made since the last step applied and committed, for the scene queries
+    /// (src/query/), which then only read it. Not thread-safe: the queries call it under their own lock.
+    const StaticBvh& staticBvh(const BodyStorage& storage, const std::vector<Shape>& shapes, TaskPool& pool);
 
 private:
     void applyStaticEdits(const BodyStorage& storage, const std::vector<Shape>& shapes, TaskPool& pool);

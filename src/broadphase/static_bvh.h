@@ -123,6 +123,8 @@ public:
     StaticBvhStats stats() const;
     /// The main tree, for ray casts and tests; node 0 is the root (no nodes when empty). Call commit() first.
     const Tree& mainTree() const { return main_; }
+    /// The tree of primitives inserted since the last merge (see commit()); queries must walk it too.
+    const Tree& secondaryTree() const { return secondary_; }
 
 private:
     /// One query chunk's output, merged in chunk order; kept across steps so a step allocates nothing.
