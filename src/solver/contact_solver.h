@@ -89,9 +89,8 @@ private:
     bool friction_ = true;
     bool rotation_ = true;
     int scratchRows_ = 1;
-    bool overflow_ = false;
-    bool moved_ = false;  ///< some body moved since prepare(): separations must follow the motion rows  ///< the last
-                          ///< colour range holds manifolds that found no free colour
+    bool overflow_ = false;  ///< the last colour range holds manifolds that found no free colour
+    bool moved_ = false;     ///< some body moved since prepare(): separations must follow the motion rows
     ContactSolverStats stats_;
     SolverBodies bodies_;
     std::vector<ContactBatch> batches_;

@@ -65,6 +65,27 @@ struct OracleShape {
     }
 };
 
+/// Double-precision vectors for brute-force oracles (SAT over every axis, exact projections).
+struct D3 {
+    double x, y, z;
+};
+inline D3 d3(Vec3 v) { return {v.x, v.y, v.z}; }
+inline D3 operator-(D3 a, D3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline D3 operator+(D3 a, D3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline double dotd(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline D3 crossd(D3 a, D3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+inline double lend(D3 a) { return std::sqrt(dotd(a, a)); }
+/// A vector rotated by a transform's rotation, normalised in double first.
+inline D3 rotd(const Transform& t, Vec3 v) {
+    const double q[4] = {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w};
+    const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    const double qn[4] = {q[0] / n, q[1] / n, q[2] / n, q[3] / n};
+    const double in[3] = {v.x, v.y, v.z};
+    double o[3];
+    OracleShape::rot(qn, in, o);
+    return {o[0], o[1], o[2]};
+}
+
 inline void oracleSupport(const void* obj, const ccd_vec3_t* dir, ccd_vec3_t* vec) {
     static_cast<const OracleShape*>(obj)->support(dir->v, vec->v);
 }

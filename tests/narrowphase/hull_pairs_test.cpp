@@ -38,7 +38,7 @@ namespace {
 
 using namespace rubble;
 using namespace rubble::detail;
-using rubble::test::OracleShape;
+using namespace rubble::test;
 
 Quat randomRotation(std::mt19937& rng) {
     std::normal_distribution<float> g;
@@ -64,25 +64,6 @@ ConvexHull boxHull(Vec3 h) {
     std::vector<Vec3> corners;
     for (int i = 0; i < 8; ++i) corners.push_back({i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z});
     return *buildShape(ConvexHullDef{corners}).hull;
-}
-
-struct D3 {
-    double x, y, z;
-};
-D3 d3(Vec3 v) { return {v.x, v.y, v.z}; }
-D3 operator-(D3 a, D3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-double dotd(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-D3 crossd(D3 a, D3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-double lend(D3 a) { return std::sqrt(dotd(a, a)); }
-
-D3 rotd(const Transform& t, Vec3 v) {
-    const double q[4] = {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w};
-    const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    const double qn[4] = {q[0] / n, q[1] / n, q[2] / n, q[3] / n};
-    const double in[3] = {v.x, v.y, v.z};
-    double o[3];
-    OracleShape::rot(qn, in, o);
-    return {o[0], o[1], o[2]};
 }
 
 /// World vertices, face normals and edges of a posed hull, in double.

@@ -64,6 +64,7 @@
 #include "parallel.h"
 #include "shapes/mesh_adjacency.h"
 #include "shapes/shape.h"
+#include "support/stage_scene.h"
 
 namespace {
 
@@ -157,24 +158,6 @@ OracleShape oracleTriangle(const TriangleVertices& tri) {
 }
 
 // Double-precision vectors for the brute-force SAT.
-struct D3 {
-    double x, y, z;
-};
-D3 d3(Vec3 v) { return {v.x, v.y, v.z}; }
-D3 operator-(D3 a, D3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-D3 operator+(D3 a, D3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-double dotd(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-D3 crossd(D3 a, D3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-double lend(D3 a) { return std::sqrt(dotd(a, a)); }
-D3 rotd(const Transform& t, Vec3 v) {
-    const double q[4] = {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w};
-    const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    const double qn[4] = {q[0] / n, q[1] / n, q[2] / n, q[3] / n};
-    const double in[3] = {v.x, v.y, v.z};
-    double o[3];
-    OracleShape::rot(qn, in, o);
-    return {o[0], o[1], o[2]};
-}
 
 /// Brute-force SAT of a posed hull (A) against a triangle (B), in double: the best separation (A -> B), the best
 /// among axes more than 1e-3 rad away from its axis (a competitor: the kernel's hysteresis may pick it), and the
@@ -726,57 +709,14 @@ TEST(HullTriangle, FeatureIdsSurviveSmallMotion) {
 
 // ---- In the stage -----------------------------------------------------------------------------------------------
 
-struct Scene {
-    BodyStorage storage;
-    std::vector<Shape> shapes;
-    ShapeBoundsTable table;
+/// The stages over a scene with one broad phase that keeps the scene's statics.
+struct Scene : rubble::test::StageScene {
     BroadPhaseStage broad;
 
-    std::uint32_t addShape(const ShapeDef& def) {
-        shapes.push_back(buildShape(def));
-        const auto index = static_cast<std::uint32_t>(shapes.size() - 1);
-        if (!shapes.back().staticOnly()) table.set(index, shapeBoundsInfo(shapes.back()));
-        return index;
-    }
-    std::uint32_t addMoving(std::uint32_t shape, Vec3 origin, Quat q) {
-        std::uint32_t i;
-        storage.allocate(BodySet::Moving, i);
-        MovingBodies& m = storage.moving;
-        const Vec3 lc = shapes[shape].unitMass.centerOfMass;
-        const Vec3 com = origin + rotate(q, lc);
-        m.px[i] = com.x, m.py[i] = com.y, m.pz[i] = com.z;
-        m.qx[i] = q.x, m.qy[i] = q.y, m.qz[i] = q.z, m.qw[i] = q.w;
-        m.lcx[i] = lc.x, m.lcy[i] = lc.y, m.lcz[i] = lc.z;
-        m.shape[i] = shape;
-        m.filterCategory[i] = 1;
-        m.filterMask[i] = ~0u;
-        return i;
-    }
-    void addStatic(std::uint32_t shape, Vec3 p) {
-        std::uint32_t i;
-        const BodyId id = storage.allocate(BodySet::Static, i);
-        StaticBodies& s = storage.statics;
-        s.px[i] = p.x, s.py[i] = p.y, s.pz[i] = p.z;
-        s.qw[i] = 1;
-        s.shape[i] = shape;
-        s.filterCategory[i] = 1;
-        s.filterMask[i] = ~0u;
-        broad.staticAdded(id.index);
-    }
-    Transform movingPose(std::uint32_t i) const {
-        const MovingBodies& m = storage.moving;
-        const Quat q{m.qx[i], m.qy[i], m.qz[i], m.qw[i]};
-        return {Vec3{m.px[i], m.py[i], m.pz[i]} - rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]}), q};
-    }
+    void addStatic(std::uint32_t shape, Vec3 p) { StageScene::addStatic(shape, p, broad); }
+    Transform movingPose(std::uint32_t i) const { return poseOf(i, false); }
     Contacts run(float margin, CandidatePairs& candidates, int threads = 2) {
-        TaskPool pool(threads);
-        Bounds bounds;
-        updateBounds(storage.moving, table, BoundsParams{1.0f / 60, margin}, pool, bounds);
-        broad.findPairs(bounds, storage, shapes, BroadPhaseKind::Auto, pool, candidates);
-        NarrowPhaseStage narrow;
-        Contacts contacts;
-        narrow.run(candidates, storage, shapes, margin, pool, contacts);
-        return contacts;
+        return rubble::test::runStages(*this, broad, threads, margin, candidates);
     }
 };
 

@@ -15,66 +15,13 @@
 #include "narrowphase/gjk.h"
 #include "narrowphase/narrowphase_stage.h"
 #include "parallel.h"
+#include "support/stage_scene.h"
 
 using namespace rubble;
+using rubble::test::StageScene;
 using namespace rubble::detail;
 
 namespace {
-
-struct Scene {
-    BodyStorage storage;
-    std::vector<Shape> shapes;
-    ShapeBoundsTable table;
-
-    std::uint32_t addShape(const ShapeDef& def) {
-        shapes.push_back(buildShape(def));
-        const auto index = static_cast<std::uint32_t>(shapes.size() - 1);
-        if (!shapes.back().staticOnly()) table.set(index, shapeBoundsInfo(shapes.back()));
-        return index;
-    }
-
-    std::uint32_t addMoving(std::uint32_t shape, Vec3 origin, Quat q, Vec3 v = {}, Vec3 w = {}) {
-        std::uint32_t i;
-        storage.allocate(BodySet::Moving, i);
-        MovingBodies& m = storage.moving;
-        const Vec3 lc = shapes[shape].unitMass.centerOfMass;
-        const Vec3 com = origin + rotate(q, lc);
-        m.px[i] = com.x, m.py[i] = com.y, m.pz[i] = com.z;
-        m.qx[i] = q.x, m.qy[i] = q.y, m.qz[i] = q.z, m.qw[i] = q.w;
-        m.lcx[i] = lc.x, m.lcy[i] = lc.y, m.lcz[i] = lc.z;
-        m.vx[i] = v.x, m.vy[i] = v.y, m.vz[i] = v.z;
-        m.wx[i] = w.x, m.wy[i] = w.y, m.wz[i] = w.z;
-        m.shape[i] = shape;
-        m.filterCategory[i] = 1;
-        m.filterMask[i] = ~0u;
-        return i;
-    }
-
-    void addStatic(std::uint32_t shape, Vec3 p, BroadPhaseStage& stage) {
-        std::uint32_t i;
-        const BodyId id = storage.allocate(BodySet::Static, i);
-        StaticBodies& s = storage.statics;
-        s.px[i] = p.x, s.py[i] = p.y, s.pz[i] = p.z;
-        s.qw[i] = 1;
-        s.shape[i] = shape;
-        s.filterCategory[i] = 1;
-        s.filterMask[i] = ~0u;
-        stage.staticAdded(id.index);
-    }
-
-    Transform poseOf(std::uint32_t i, bool isStatic) const {
-        if (isStatic) {
-            const StaticBodies& s = storage.statics;
-            return {{s.px[i], s.py[i], s.pz[i]}, {s.qx[i], s.qy[i], s.qz[i], s.qw[i]}};
-        }
-        const MovingBodies& m = storage.moving;
-        const Quat q{m.qx[i], m.qy[i], m.qz[i], m.qw[i]};
-        return {Vec3{m.px[i], m.py[i], m.pz[i]} - rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]}), q};
-    }
-    const Shape& shapeOf(std::uint32_t i, bool isStatic) const {
-        return shapes[isStatic ? storage.statics.shape[i] : storage.moving.shape[i]];
-    }
-};
 
 Quat randomRotation(std::mt19937& rng) {
     std::normal_distribution<float> g;
@@ -83,21 +30,10 @@ Quat randomRotation(std::mt19937& rng) {
     return {q.x / n, q.y / n, q.z / n, q.w / n};
 }
 
-Contacts runStages(Scene& scene, BroadPhaseStage& broad, int threads, float margin, CandidatePairs& candidates) {
-    TaskPool pool(threads);
-    Bounds bounds;
-    updateBounds(scene.storage.moving, scene.table, BoundsParams{1.0f / 60, margin}, pool, bounds);
-    broad.findPairs(bounds, scene.storage, scene.shapes, BroadPhaseKind::Auto, pool, candidates);
-    NarrowPhaseStage narrow;
-    Contacts contacts;
-    narrow.run(candidates, scene.storage, scene.shapes, NarrowPhaseParams{margin, 1.0f / 60}, pool, contacts);
-    return contacts;
-}
-
 }  // namespace
 
 TEST(NarrowPhaseStage, ManifoldsExactlyWhereGjkFindsTheShapesWithinTheMargin) {
-    Scene scene;
+    StageScene scene;
     BroadPhaseStage broad;
     const std::uint32_t ball = scene.addShape(SphereDef{0.5f}), cube = scene.addShape(BoxDef{{0.5f, 0.3f, 0.4f}}),
                         pill = scene.addShape(CapsuleDef{0.3f, 0.5f}), ground = scene.addShape(BoxDef{{20, 0.5f, 20}}),
@@ -163,7 +99,7 @@ TEST(NarrowPhaseStage, OutputDoesNotDependOnTheThreadCount) {
     // that every pair has its own speculative margin, over a ground box and a mesh: pairs, normals, points, depths
     // and feature ids must be the same bits on 1, 2 and 3 threads.
     auto run = [](int threads) {
-        Scene scene;
+        StageScene scene;
         BroadPhaseStage broad;
         CompoundDef compoundDef;
         compoundDef.children.push_back({SphereDef{0.3f}, {{-0.4f, 0, 0}, {}}});
@@ -229,7 +165,7 @@ TEST(NarrowPhaseStage, FastApproachGetsSpeculativePointsBeforeTheBodiesMeet) {
         Vec3 normal[4];
     };
     auto run = [&](float speed, int threads) {
-        Scene scene;
+        StageScene scene;
         BroadPhaseStage broad;
         const std::uint32_t ball = scene.addShape(SphereDef{0.5f}), cube = scene.addShape(BoxDef{}),
                             pill = scene.addShape(CapsuleDef{0.5f, 0.5f}),
@@ -276,7 +212,7 @@ TEST(NarrowPhaseStage, MarginGrowsWithTheClosingSpeedAndTheSpinOnly) {
     // sweep 10/60 rad times their 0.87 m reach).
     const float gap = 0.03f;
     auto manifolds = [&](Vec3 vA, Vec3 vB, Vec3 wB) {
-        Scene scene;
+        StageScene scene;
         BroadPhaseStage broad;
         const std::uint32_t cube = scene.addShape(BoxDef{});
         scene.addMoving(cube, {0, 0, 0}, {}, vA);
@@ -296,7 +232,7 @@ TEST(NarrowPhaseStage, MarginGrowsWithTheClosingSpeedAndTheSpinOnly) {
 TEST(NarrowPhaseStage, BodiesOnAFlatMeshTouchItWithTheFaceNormalEvenOverInternalEdges) {
     // A flat 8 x 8 grid mesh, two triangles per cell. Bodies rest on it at positions that put their contacts
     // exactly on internal edges and vertices; the mesh's active-edge masks must make every normal the face's.
-    Scene scene;
+    StageScene scene;
     BroadPhaseStage broad;
     TriangleMeshDef grid;
     for (int r = 0; r <= 8; ++r)
@@ -341,7 +277,7 @@ TEST(NarrowPhaseStage, CompoundChildrenCollideLikeTheSameShapesAsSeparateBodies)
     const Transform body{{0.3f, 0.1f, -0.2f}, Quat::fromAxisAngle({0, 0, 1}, -0.2f)};
 
     auto run = [&](bool asCompound, std::vector<ContactPair>& pairs) {
-        Scene scene;
+        StageScene scene;
         BroadPhaseStage broad;
         const std::uint32_t ground = scene.addShape(BoxDef{{10, 0.5f, 10}});
         scene.addStatic(ground, {0, -0.5f, 0}, broad);
