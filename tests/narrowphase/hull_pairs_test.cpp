@@ -642,3 +642,38 @@ TEST(CapsuleBox, ZeroLengthCapsuleMatchesSphereBox) {
 }
 
 }  // namespace
+
+// Two equal cubes stacked face to face with a small twist about the normal: every point of the overlap is equally
+// deep, and the overlap is an octagon whose vertices sit near the corners and near the edge midpoints. The four
+// points kept must be near the corners (their quadrilateral covers nearly the whole face), whatever the twist; a
+// point from an edge middle leaves a corner unsupported and the upper cube rocks. Exact area of the overlap: the
+// square less four triangles; the kept quadrilateral must cover at least 97% of it (a midpoint costs 25%).
+TEST(HullPairs, FacesRestingFlatKeepTheirCorners) {
+    const ConvexHull cube = boxHull({0.5f, 0.5f, 0.5f});
+    for (const float twist : {1e-6f, 1e-4f, 1e-2f, 0.05f, -0.03f}) {
+        const Transform lower{{0, 0.5f, 0}, {}};
+        const Transform upper{{0, 1.4995f, 0}, {0, std::sin(twist / 2), 0, std::cos(twist / 2)}};
+        Manifold boxes, hulls;
+        ASSERT_TRUE(collideBoxes(lower, {0.5f, 0.5f, 0.5f}, upper, {0.5f, 0.5f, 0.5f}, 0.02f, boxes));
+        ASSERT_TRUE(collideHulls(cube, lower, cube, upper, 0.02f, hulls));
+        for (const Manifold* m : {&boxes, &hulls}) {
+            ASSERT_EQ(m->pointCount, 4) << twist;
+            // Area of the kept points' convex quadrilateral in the xz plane, points ordered by angle.
+            std::vector<std::pair<float, Vec3>> byAngle;
+            for (int i = 0; i < 4; ++i)
+                byAngle.push_back(
+                    {std::atan2(m->points[i].position.z, m->points[i].position.x), m->points[i].position});
+            std::sort(byAngle.begin(), byAngle.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+            double area = 0;
+            for (int i = 0; i < 4; ++i) {
+                const Vec3 p = byAngle[i].second, q = byAngle[(i + 1) % 4].second;
+                area += 0.5 * (double(p.x) * q.z - double(q.x) * p.z);
+            }
+            // The overlap of two unit squares turned by t about their common centre: 1 - (1 - cos t)/sin t, to
+            // first order 1 - t/2 (four corner triangles).
+            const double t = std::fabs(double(twist));
+            const double overlap = t < 1e-9 ? 1.0 : 1.0 - (1.0 - std::cos(t)) / std::sin(t);
+            EXPECT_GT(area, 0.97 * overlap) << "twist " << twist << (m == &boxes ? " (box-box)" : " (hull-hull)");
+        }
+    }
+}
