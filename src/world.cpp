@@ -583,6 +583,7 @@ void World::step(float dt) {
             cs.loadBodies(w.bodies.moving, *w.pool);
             if (solver.warmStarting) cs.warmStart(*w.pool);
             for (int i = 0; i < w.settings.velocityIterations; ++i) cs.solveVelocities(true, *w.pool);
+            if (solver.shockPropagation && !softStep) cs.propagateShock();
             if (splitImpulse)
                 for (int i = 0; i < w.settings.positionIterations; ++i) cs.solvePositions(*w.pool);
             cs.storeVelocities(w.bodies.moving, *w.pool);

@@ -534,7 +534,7 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
     expectObject(j, at);
     checkKeys(j, at,
               {"dt", "gravity", "substeps", "velocity_iterations", "position_iterations", "threads", "integrator",
-               "effects", "broadphase", "position_correction", "warm_starting"});
+               "effects", "broadphase", "position_correction", "warm_starting", "shock_propagation"});
     WorldSettings& s = scene.settings;
     if (j.contains("dt")) s.timeStep = getFloat(j["dt"], at / "dt", Sign::Positive);
     if (j.contains("gravity")) s.gravity = getVec3(j["gravity"], at / "gravity");
@@ -570,6 +570,8 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
         s.solver.positionCorrection = *v;
     }
     if (j.contains("warm_starting")) s.solver.warmStarting = getBool(j["warm_starting"], at / "warm_starting");
+    if (j.contains("shock_propagation"))
+        s.solver.shockPropagation = getBool(j["shock_propagation"], at / "shock_propagation");
     if (j.contains("broadphase")) {
         const std::string& name = getString(j["broadphase"], at / "broadphase");
         const auto v = broadPhaseFromName(name);

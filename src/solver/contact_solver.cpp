@@ -168,7 +168,8 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     const Softness staticSoft = soft(2.0f * hertz, settings_.contactDampingRatio, h);
     const Softness stiff{settings_.baumgarte * invH, 1.0f, 0.0f};
     const bool softStep = settings_.positionCorrection == PositionCorrection::SoftStep;
-    const float slop = settings_.linearSlop;
+    // Soft contacts are damped springs from the first millimetre: a dead zone would only add to the sag of stacks.
+    const float slop = softStep ? 0.0f : settings_.linearSlop;
     const bool warmStarting = settings_.warmStarting;
     pool.forChunks(batchCount, kManifoldChunk / kBatchLanes, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t bi = begin; bi < end; ++bi) {
@@ -264,6 +265,8 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
             }
         }
     });
+    shockOrder_.clear();
+    if (settings_.shockPropagation) orderForShock();
 }
 
 void ContactSolver::loadBodies(const MovingBodies& m, TaskPool& pool) {
@@ -301,30 +304,31 @@ void ContactSolver::storeVelocities(MovingBodies& m, TaskPool& pool) const {
     });
 }
 
+BodyRows ContactSolver::rowsFor(int worker) {
+    SolverBodies& b = bodies_;
+    return BodyRows{b.vx.data(),
+                    b.vy.data(),
+                    b.vz.data(),
+                    b.wx.data(),
+                    b.wy.data(),
+                    b.wz.data(),
+                    b.dpx.data(),
+                    b.dpy.data(),
+                    b.dpz.data(),
+                    b.dax.data(),
+                    b.day.data(),
+                    b.daz.data(),
+                    b.pvx.data(),
+                    b.pvy.data(),
+                    b.pvz.data(),
+                    b.pwx.data(),
+                    b.pwy.data(),
+                    b.pwz.data(),
+                    static_cast<std::int32_t>(b.count + 1 + static_cast<std::uint32_t>(worker))};
+}
+
 template <class Kernel>
 void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel) {
-    SolverBodies& b = bodies_;
-    const auto rowsFor = [&](int worker) {
-        return BodyRows{b.vx.data(),
-                        b.vy.data(),
-                        b.vz.data(),
-                        b.wx.data(),
-                        b.wy.data(),
-                        b.wz.data(),
-                        b.dpx.data(),
-                        b.dpy.data(),
-                        b.dpz.data(),
-                        b.dax.data(),
-                        b.day.data(),
-                        b.daz.data(),
-                        b.pvx.data(),
-                        b.pvy.data(),
-                        b.pvz.data(),
-                        b.pwx.data(),
-                        b.pwy.data(),
-                        b.pwz.data(),
-                        static_cast<std::int32_t>(b.count + 1 + static_cast<std::uint32_t>(worker))};
-    };
     const std::size_t colorCount = colors_.size() - (overflow_ ? 1 : 0);
     for (std::size_t c = 0; c < colorCount; ++c) {
         const ColorRange range = colors_[c];
@@ -341,6 +345,124 @@ void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel) {
         for (std::size_t i = 0; i < range.batchCount; ++i)
             for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
                 kernel.template operator()<float>(batches_[range.firstBatch + i], lane, rows);
+    }
+}
+
+void ContactSolver::orderForShock() {
+    // Levels by breadth-first search over the contacts between dynamic bodies, from the bodies that touch something
+    // that cannot move (level 0). Serial and in manifold order, so the order is the same for every thread count.
+    const std::uint32_t bodyCount = bodies_.count;
+    const std::int32_t stillRow = static_cast<std::int32_t>(bodyCount);
+    constexpr std::uint32_t kUnreached = ~0u;
+    adjacencyStart_.assign(bodyCount + 1, 0);
+    levelOf_.assign(bodyCount, kUnreached);
+    std::vector<std::uint32_t>& queue = adjacency_;  // reused below; first the level-0 bodies
+    const auto forEachLane = [&](auto&& visit) {
+        for (std::size_t bi = 0; bi < batches_.size(); ++bi)
+            for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
+                if (manifoldOfLane_[bi * kBatchLanes + lane] != ~0u) visit(batches_[bi], lane, bi * kBatchLanes + lane);
+    };
+    const auto dynamicSide = [](const ContactBatch& b, std::size_t lane, int side) {
+        return (side == 0 ? b.invMassA[lane] : b.invMassB[lane]) > 0;
+    };
+    forEachLane([&](const ContactBatch& b, std::size_t lane, std::size_t) {
+        const bool dynA = dynamicSide(b, lane, 0), dynB = dynamicSide(b, lane, 1);
+        if (dynA && dynB) {
+            adjacencyStart_[static_cast<std::uint32_t>(b.bodyA[lane]) + 1] += 1;
+            adjacencyStart_[static_cast<std::uint32_t>(b.bodyB[lane]) + 1] += 1;
+        } else {
+            const std::int32_t body = dynA ? b.bodyA[lane] : b.bodyB[lane];
+            if (body != stillRow) levelOf_[static_cast<std::uint32_t>(body)] = 0;
+        }
+    });
+    for (std::uint32_t i = 0; i < bodyCount; ++i) adjacencyStart_[i + 1] += adjacencyStart_[i];
+    std::vector<std::uint32_t> neighbours(adjacencyStart_[bodyCount]);
+    {
+        std::vector<std::uint32_t> fill(adjacencyStart_.begin(), adjacencyStart_.end() - 1);
+        forEachLane([&](const ContactBatch& b, std::size_t lane, std::size_t) {
+            if (!dynamicSide(b, lane, 0) || !dynamicSide(b, lane, 1)) return;
+            const auto a = static_cast<std::uint32_t>(b.bodyA[lane]), c = static_cast<std::uint32_t>(b.bodyB[lane]);
+            neighbours[fill[a]++] = c;
+            neighbours[fill[c]++] = a;
+        });
+    }
+    queue.clear();
+    for (std::uint32_t i = 0; i < bodyCount; ++i)
+        if (levelOf_[i] == 0) queue.push_back(i);
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+        const std::uint32_t body = queue[head];
+        for (std::uint32_t e = adjacencyStart_[body]; e < adjacencyStart_[body + 1]; ++e) {
+            const std::uint32_t other = neighbours[e];
+            if (levelOf_[other] == kUnreached) levelOf_[other] = levelOf_[body] + 1, queue.push_back(other);
+        }
+    }
+    // A contact takes part when one side is lower than the other (or cannot move); contacts between bodies on the
+    // same level, and in piles that touch nothing still, are left to the iterations.
+    forEachLane([&](const ContactBatch& b, std::size_t lane, std::size_t at) {
+        const bool dynA = dynamicSide(b, lane, 0), dynB = dynamicSide(b, lane, 1);
+        if (!dynA || !dynB) {
+            shockOrder_.push_back({0, static_cast<std::uint32_t>(at), dynA ? 1u : 0u});
+            return;
+        }
+        const std::uint32_t la = levelOf_[static_cast<std::uint32_t>(b.bodyA[lane])];
+        const std::uint32_t lb = levelOf_[static_cast<std::uint32_t>(b.bodyB[lane])];
+        if (la == lb) return;
+        shockOrder_.push_back({std::max(la, lb), static_cast<std::uint32_t>(at), la < lb ? 0u : 1u});
+    });
+    std::stable_sort(shockOrder_.begin(), shockOrder_.end(),
+                     [](const ShockContact& x, const ShockContact& y) { return x.level < y.level; });
+}
+
+void ContactSolver::propagateShock() {
+    if (shockOrder_.empty()) return;
+    SolveParams params;
+    params.invH = 1.0f / h_;
+    params.maxPushOutVelocity = settings_.maxPushOutVelocity;
+    // Rigid in the pass for the soft step: a soft contact with its lower body held would take its softness twice.
+    params.useBias = settings_.positionCorrection == PositionCorrection::Baumgarte;
+    params.moved = moved_;
+    const BodyRows rows = rowsFor(0);
+    for (const ShockContact& s : shockOrder_) {
+        ContactBatch& b = batches_[s.lane / kBatchLanes];
+        const std::size_t lane = s.lane % kBatchLanes;
+        // Hold the lower side still for this contact (no mass, no inertia; its velocity is still read), and give
+        // the points the effective masses of the upper body alone.
+        const bool holdA = s.heldSide == 0;
+        float* held[7] = {holdA ? b.invMassA : b.invMassB, holdA ? b.iaXX : b.ibXX, holdA ? b.iaYY : b.ibYY,
+                          holdA ? b.iaZZ : b.ibZZ,         holdA ? b.iaXY : b.ibXY, holdA ? b.iaXZ : b.ibXZ,
+                          holdA ? b.iaYZ : b.ibYZ};
+        float heldValues[7];
+        for (int i = 0; i < 7; ++i) heldValues[i] = held[i][lane], held[i][lane] = 0;
+        const float upperMass = holdA ? b.invMassB[lane] : b.invMassA[lane];
+        const simd::SymMat3W<float> upperInertia =
+            holdA ? contact_kernels::inertiaB<float>(b, lane) : contact_kernels::inertiaA<float>(b, lane);
+        const Vec3 n{b.nx[lane], b.ny[lane], b.nz[lane]}, t1{b.t1x[lane], b.t1y[lane], b.t1z[lane]},
+            t2{b.t2x[lane], b.t2y[lane], b.t2z[lane]};
+        float pointMasses[kMaxManifoldPoints][3];
+        for (int i = 0; i < kMaxManifoldPoints; ++i) {
+            ContactBatch::Point& p = b.points[i];
+            pointMasses[i][0] = p.normalMass[lane], pointMasses[i][1] = p.tangentMass1[lane];
+            pointMasses[i][2] = p.tangentMass2[lane];
+            if (p.normalMass[lane] == 0) continue;  // no point here
+            const Vec3 r =
+                holdA ? Vec3{p.rBx[lane], p.rBy[lane], p.rBz[lane]} : Vec3{p.rAx[lane], p.rAy[lane], p.rAz[lane]};
+            const auto effective = [&](Vec3 dir) {
+                const simd::Vec3W<float> rd = toWide(cross(r, dir));
+                return 1.0f / (upperMass + simd::dot(rd, upperInertia * rd));
+            };
+            p.normalMass[lane] = effective(n);
+            if (p.tangentMass1[lane] != 0) p.tangentMass1[lane] = effective(t1), p.tangentMass2[lane] = effective(t2);
+        }
+        if (friction_)
+            contact_kernels::solve<float, true>(b, lane, rows, params);
+        else
+            contact_kernels::solve<float, false>(b, lane, rows, params);
+        for (int i = 0; i < 7; ++i) held[i][lane] = heldValues[i];
+        for (int i = 0; i < kMaxManifoldPoints; ++i) {
+            ContactBatch::Point& p = b.points[i];
+            p.normalMass[lane] = pointMasses[i][0], p.tangentMass1[lane] = pointMasses[i][1];
+            p.tangentMass2[lane] = pointMasses[i][2];
+        }
     }
 }
 

@@ -61,6 +61,9 @@ public:
     /// One velocity iteration. With bias, overlap is corrected by the chosen position correction; without, only
     /// speculative gaps are respected (the relax iterations of the soft step, and split impulses' velocity pass).
     void solveVelocities(bool useBias, TaskPool& pool);
+    /// Shock propagation (SolverSettings::shockPropagation): one pass over the contacts from the ground up, each
+    /// contact's lower body held still. Serial, in a fixed order.
+    void propagateShock();
     /// Split impulses: one iteration on the pseudo-velocities.
     void solvePositions(TaskPool& pool);
     /// Split impulses: moves the bodies by their pseudo-velocities over the substep and clears them.
@@ -83,6 +86,15 @@ public:
 private:
     template <class Kernel>
     void forEachColor(TaskPool& pool, Kernel&& kernel);
+    BodyRows rowsFor(int worker);
+    void orderForShock();
+
+    /// A contact of the shock pass: where its manifold sits, and which side is held still (0 = A, 1 = B).
+    struct ShockContact {
+        std::uint32_t level = 0;  ///< the upper body's distance in contacts from a body that cannot move
+        std::uint32_t lane = 0;   ///< batch * kBatchLanes + lane
+        std::uint32_t heldSide = 0;
+    };
 
     SolverSettings settings_;
     float h_ = 0;
@@ -96,6 +108,9 @@ private:
     std::vector<ContactBatch> batches_;
     std::vector<ColorRange> colors_;
     std::vector<std::uint32_t> manifoldOfLane_;  ///< batch * kLanes + lane -> manifold, ~0u for an empty lane
+    std::vector<ShockContact> shockOrder_;       ///< by level, then by lane
+    std::vector<std::uint32_t> levelOf_;         ///< shock pass: level per solver index
+    std::vector<std::uint32_t> adjacencyStart_, adjacency_;
     // Prepare scratch.
     std::vector<std::int32_t> solverIndex_;  ///< dense index of a moving body -> solver index, -1 if untouched
     std::vector<std::uint64_t> bodyColors_;  ///< per solver index: colours that already hold the body

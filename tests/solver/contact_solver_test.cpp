@@ -40,10 +40,11 @@ void buildPyramid(World& world, int layers) {
     }
 }
 
-std::uint64_t pyramidHash(int threads, PositionCorrection correction) {
+std::uint64_t pyramidHash(int threads, PositionCorrection correction, bool shock = false) {
     WorldSettings s;
     s.threads = threads;
     s.solver.positionCorrection = correction;
+    s.solver.shockPropagation = shock;
     World world(s);
     buildPyramid(world, 8);
     // Knock it so that the solve is not symmetric and colours really interleave.
@@ -59,6 +60,9 @@ TEST(ContactSolver, StateDoesNotDependOnThreadCount) {
         EXPECT_EQ(one, pyramidHash(2, c)) << positionCorrectionName(c);
         EXPECT_EQ(one, pyramidHash(3, c)) << positionCorrectionName(c);
     }
+    const std::uint64_t shocked = pyramidHash(1, PositionCorrection::Baumgarte, true);
+    EXPECT_EQ(shocked, pyramidHash(2, PositionCorrection::Baumgarte, true));
+    EXPECT_NE(shocked, pyramidHash(1, PositionCorrection::Baumgarte)) << "the shock pass changed nothing";
 }
 
 TEST(ContactSolver, PyramidColoursFillTheLanes) {
