@@ -3,7 +3,8 @@
 namespace rubble::detail {
 
 EffectSet resolveEffects(EffectSet declared, const WorldSettings& settings, const MovingBodies& moving,
-                         const StaticBodies& statics, const std::vector<Shape>& shapes, bool& anyDamping) {
+                         const StaticBodies& statics, const std::vector<Shape>& shapes, bool anyJoints,
+                         bool& anyDamping) {
     EffectSet active = declared;
 
     const bool gravityVector = settings.gravity.x != 0 || settings.gravity.y != 0 || settings.gravity.z != 0;
@@ -27,10 +28,10 @@ EffectSet resolveEffects(EffectSet declared, const WorldSettings& settings, cons
     }
 
     if (!(gravityVector && anyGravityScale)) active = active.without(Effect::Gravity);
-    if (!canTurn) active = active.without(Effect::Rotation);
+    if (!canTurn && !anyJoints) active = active.without(Effect::Rotation);
     if (!anyFriction) active = active.without(Effect::Friction);
     if (!anyRestitution) active = active.without(Effect::Restitution);
-    active = active.without(Effect::Joints);  // no joint exists before the joint stage does
+    if (!anyJoints) active = active.without(Effect::Joints);
     return active;
 }
 

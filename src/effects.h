@@ -14,11 +14,12 @@ namespace rubble::detail {
 /// - rotation: needs a moving body that can turn: one spinning or under torque now, or a dynamic body that
 ///   contacts can turn (any non-sphere, or a sphere with friction);
 /// - friction / restitution: need a body with a non-zero coefficient;
-/// - joints: need a joint (none exist until the joint stage does);
+/// - joints: need a joint that has not broken (`anyJoints`); a joint can turn its bodies, so it keeps rotation;
 /// - sleeping and continuous collision are choices, kept as declared.
 /// `anyDamping` reports, from the same pass over the bodies, whether a moving body has damping (which makes the
 /// velocity stage necessary even without gravity, forces or rotation).
 EffectSet resolveEffects(EffectSet declared, const WorldSettings& settings, const MovingBodies& moving,
-                         const StaticBodies& statics, const std::vector<Shape>& shapes, bool& anyDamping);
+                         const StaticBodies& statics, const std::vector<Shape>& shapes, bool anyJoints,
+                         bool& anyDamping);
 
 }  // namespace rubble::detail

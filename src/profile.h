@@ -33,4 +33,18 @@ private:
     Clock::time_point begin_;
 };
 
+/// Adds the wall time of a scope to Profile::jointMs: the joint solver's share of the solver stage, whose calls are
+/// interleaved with the contact solver's.
+class JointTimer {
+public:
+    explicit JointTimer(Profile& profile) : profile_(profile), begin_(Clock::now()) {}
+    ~JointTimer() { profile_.jointMs += std::chrono::duration<double, std::milli>(Clock::now() - begin_).count(); }
+    JointTimer(const JointTimer&) = delete;
+    JointTimer& operator=(const JointTimer&) = delete;
+
+private:
+    Profile& profile_;
+    Clock::time_point begin_;
+};
+
 }  // namespace rubble::detail

@@ -236,6 +236,7 @@ void World::destroyBody(BodyId id) {
         slot.set == BodySet::Moving ? w.bodies.moving.shape[slot.dense] : w.bodies.statics.shape[slot.dense];
     w.shapeUsers[shape] -= 1;
     if (slot.set == BodySet::Static) w.broadPhase.staticRemoved(id.index);
+    w.joints.removeAttachedTo(id);
     w.bodies.release(id);
     w.queries.bodiesChanged();
     w.effectsDirty = true;
@@ -524,6 +525,11 @@ void World::step(float dt) {
                                   w.anyDamping || params.integrator != Integrator::SemiImplicitEuler;
 
     const SolverSettings& solver = w.settings.solver;
+    // Joints join the solve only when one acts (Effect::Joints is inferred from the joint store); else no joint code
+    // runs. Joints that break in this step stop acting at once but keep their rows until the step ends.
+    const bool joints = w.effects.has(Effect::Joints);
+    const std::size_t brokenBefore = w.joints.brokenReports().size();
+    if (joints) profile.joints = w.joints.activeCount();
     const bool softStep = solver.positionCorrection == PositionCorrection::SoftStep;
     const bool splitImpulse = solver.positionCorrection == PositionCorrection::SplitImpulse;
     bool collided = false;
@@ -539,7 +545,7 @@ void World::step(float dt) {
         // One collision pass per step, whatever the substep count; boxes cover the motion of the whole step. Pairs
         // exist only where a moving body can meet another body.
         const std::uint32_t moving = w.bodies.moving.size();
-        if (sub == 0 && (moving > 1 || (moving == 1 && w.bodies.statics.size() > 0))) {
+        if (sub == 0 && (moving > 1 || (moving == 1 && w.bodies.statics.size() > 0) || joints)) {
             collided = true;
             {
                 detail::StageTimer timer(profile, Stage::UpdateBounds, w.origin);
@@ -569,20 +575,37 @@ void World::step(float dt) {
             profile.warmStartedPoints = w.contactCache.matchedPoints();
             {
                 detail::StageTimer timer(profile, Stage::Solver, w.origin);
-                w.contactSolver.prepare(w.contacts, w.impulses, w.bodies, w.settings, w.effects, params.dt, *w.pool);
+                if (joints) {
+                    detail::JointTimer jointTimer(profile);
+                    w.jointSolver.couple(w.joints, w.bodies, w.jointCoupling);
+                }
+                w.contactSolver.prepare(w.contacts, w.impulses, w.bodies, w.settings, w.effects, params.dt, *w.pool,
+                                        joints ? &w.jointCoupling : nullptr);
             }
             const detail::ContactSolverStats& stats = w.contactSolver.stats();
             profile.constraints = stats.constraints;
             profile.colors = stats.colors;
             profile.laneOccupancy = stats.laneOccupancy;
         }
-        const bool solve = collided && !w.contactSolver.empty();
+        const bool solve = collided && (!w.contactSolver.empty() || joints);
         if (solve) {
             detail::StageTimer timer(profile, Stage::Solver, w.origin);
             detail::ContactSolver& cs = w.contactSolver;
+            detail::JointSolver& js = w.jointSolver;
             cs.loadBodies(w.bodies.moving, *w.pool);
+            if (joints) {
+                detail::JointTimer jointTimer(profile);
+                js.prepare(w.joints, w.bodies, cs, w.settings, params.dt, *w.pool);
+                if (solver.warmStarting) js.warmStart(cs.bodies());
+            }
             if (solver.warmStarting) cs.warmStart(*w.pool);
-            for (int i = 0; i < w.settings.velocityIterations; ++i) cs.solveVelocities(true, *w.pool);
+            for (int i = 0; i < w.settings.velocityIterations; ++i) {
+                if (joints) {
+                    detail::JointTimer jointTimer(profile);
+                    js.solve(cs.bodies(), true);
+                }
+                cs.solveVelocities(true, *w.pool);
+            }
             if (solver.shockPropagation && !softStep) cs.propagateShock();
             if (splitImpulse)
                 for (int i = 0; i < w.settings.positionIterations; ++i) cs.solvePositions(*w.pool);
@@ -603,9 +626,19 @@ void World::step(float dt) {
             if (relax || bounce) {
                 cs.loadBodies(w.bodies.moving, *w.pool);
                 if (relax)
-                    for (int i = 0; i < w.settings.positionIterations; ++i) cs.solveVelocities(false, *w.pool);
+                    for (int i = 0; i < w.settings.positionIterations; ++i) {
+                        if (joints) {
+                            detail::JointTimer jointTimer(profile);
+                            w.jointSolver.solve(cs.bodies(), false);
+                        }
+                        cs.solveVelocities(false, *w.pool);
+                    }
                 if (bounce) cs.applyRestitution(*w.pool);
                 cs.storeVelocities(w.bodies.moving, *w.pool);
+            }
+            if (joints) {
+                detail::JointTimer jointTimer(profile);
+                w.jointSolver.finish(w.joints);
             }
         }
     }
@@ -615,6 +648,10 @@ void World::step(float dt) {
         w.contactCache.remember(w.contacts, w.impulses, *w.pool);
     }
     w.forcesPending = false;
+    if (joints) {
+        profile.brokenJoints = static_cast<std::uint32_t>(w.joints.brokenReports().size() - brokenBefore);
+        if (profile.brokenJoints > 0) w.effectsDirty = true;
+    }
 
 #if RUBBLE_VALIDATE
     if (const std::string problem = w.bodies.checkInvariants(); !problem.empty())

@@ -11,6 +11,7 @@
 #include "contacts.h"
 #include "effects.h"
 #include "integrate.h"
+#include "joint_storage.h"
 #include "narrowphase/narrowphase_stage.h"
 #include "parallel.h"
 #include "profile.h"
@@ -18,6 +19,7 @@
 #include "rubble/world.h"
 #include "shapes/shape.h"
 #include "solver/contact_solver.h"
+#include "solver/joint_solver.h"
 
 namespace rubble {
 namespace detail {
@@ -68,6 +70,9 @@ struct World::Impl {
     detail::ContactCache contactCache;
     std::vector<detail::PointImpulse> impulses;
     detail::ContactSolver contactSolver;
+    detail::JointStore joints;
+    detail::JointSolver jointSolver;
+    detail::JointCoupling jointCoupling;
     std::vector<std::uint32_t> nonFinite;
     std::vector<BodyId> frozenReports;
     /// The scene queries' trees (src/query/); told of every body added, removed or moved outside the step.
@@ -180,7 +185,8 @@ struct World::Impl {
 
     void resolveEffectsIfDirty() {
         if (!effectsDirty) return;
-        effects = detail::resolveEffects(settings.effects, settings, bodies.moving, bodies.statics, shapes, anyDamping);
+        effects = detail::resolveEffects(settings.effects, settings, bodies.moving, bodies.statics, shapes,
+                                         joints.activeCount() > 0, anyDamping);
         effectsDirty = false;
     }
 };

@@ -26,4 +26,17 @@ struct ShapeId {
     friend constexpr bool operator!=(ShapeId a, ShapeId b) { return !(a == b); }
 };
 
+/// Handle to a joint. Stays valid until the joint is destroyed, or one of its bodies is (a broken joint keeps its
+/// handle: see World::isJointBroken).
+struct JointId {
+    unsigned index = 0;
+    unsigned generation = 0;  ///< 0 means null
+
+    constexpr bool isNull() const { return generation == 0; }
+    friend constexpr bool operator==(JointId a, JointId b) {
+        return a.index == b.index && a.generation == b.generation;
+    }
+    friend constexpr bool operator!=(JointId a, JointId b) { return !(a == b); }
+};
+
 }  // namespace rubble

@@ -51,6 +51,10 @@ struct Profile {
     std::uint32_t constraints = 0;        ///< contact manifolds the solver works on (a dynamic body on one side)
     std::uint32_t colors = 0;             ///< graph colours of the contact constraints
     float laneOccupancy = 0;              ///< filled SIMD lanes over lanes used by the solver, in [0, 1]
+    std::uint32_t joints = 0;             ///< joints that acted in this step (unbroken; zero when joints did not run)
+    std::uint32_t brokenJoints = 0;       ///< joints that broke in this step
+    /// Wall time of the joint solver's work inside the solver stage (rows, warm start, iterations), ms.
+    double jointMs = 0;
 
     const StageTiming& operator[](Stage s) const { return stages[static_cast<int>(s)]; }
     StageTiming& operator[](Stage s) { return stages[static_cast<int>(s)]; }

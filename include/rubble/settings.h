@@ -68,6 +68,10 @@ struct SolverSettings {
     /// damping ratio. Contacts against static bodies use twice the frequency.
     float contactHertz = 30.0f;
     float contactDampingRatio = 10.0f;
+    /// Soft step: stiffness of rigid joints (distance, ball, hinge) as a natural frequency (capped at a quarter of
+    /// the substep rate), Hz, and damping ratio. Baumgarte and split impulses correct joints by `baumgarte`.
+    float jointHertz = 60.0f;
+    float jointDampingRatio = 2.0f;
     /// Largest speed at which overlap is pushed apart (soft step and Baumgarte), m/s.
     float maxPushOutVelocity = 3.0f;
     /// Baumgarte and split impulses: fraction of the overlap removed per step, and the overlap left alone, m.

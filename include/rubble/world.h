@@ -3,10 +3,12 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "rubble/body.h"
 #include "rubble/id.h"
+#include "rubble/joint.h"
 #include "rubble/math.h"
 #include "rubble/profile.h"
 #include "rubble/query.h"
@@ -88,6 +90,37 @@ public:
     EffectSet activeEffects() const;
     const Profile& lastProfile() const;
     std::uint64_t stepCount() const;
+
+    // -----------------------------------------------------------------------------------------------------------
+    // Joints (include/rubble/joint.h, src/joint_storage.h, src/solver/joint_solver.h)
+    //
+    // Joints are solved in the same velocity iterations as the contacts (joints first, then the contacts). A body may
+    // have any number of joints; destroyBody destroys the joints attached to the body (their JointIds become
+    // invalid). Bad input (null, stale or static-static bodies, the same body twice, non-finite or out-of-range
+    // numbers, zero axes) throws rubble::Error naming the call, the field and the value.
+
+    JointId createJoint(const DistanceJointDef& def);
+    JointId createJoint(const SpringJointDef& def);
+    JointId createJoint(const BallJointDef& def);
+    JointId createJoint(const HingeJointDef& def);
+    void destroyJoint(JointId id);
+    bool isValid(JointId id) const;
+    std::uint32_t jointCount() const;
+    JointType jointType(JointId id) const;
+    /// The joint's bodies, A then B.
+    std::pair<BodyId, BodyId> jointBodies(JointId id) const;
+    /// True once the joint broke; it no longer acts but keeps its handle until destroyed.
+    bool isJointBroken(JointId id) const;
+    /// Joints that broke since the last call, each reported once, in the order they broke.
+    std::vector<JointId> takeBrokenJoints();
+    /// Force the joint applied to body B in the last substep it acted, N (A received the opposite).
+    Vec3 jointReactionForce(JointId id) const;
+    /// Torque the joint applied to body B about the anchor in the last substep it acted, N m (hinges only).
+    Vec3 jointReactionTorque(JointId id) const;
+    /// Current hinge angle (B relative to A about the axis, zero at creation), rad in (-pi, pi].
+    float hingeAngle(JointId id) const;
+    /// Motor of a hinge: enables or disables it and sets its speed (rad/s) and torque limit (N m, >= 0).
+    void setHingeMotor(JointId id, bool enable, float speed, float maxTorque);
 
     /// Bodies frozen because their state went non-finite, since the last call.
     std::vector<BodyId> takeFrozenBodies();

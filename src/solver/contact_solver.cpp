@@ -57,7 +57,8 @@ Softness soft(float hertz, float dampingRatio, float h) {
 }  // namespace
 
 void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImpulse>& warm, const BodyStorage& storage,
-                            const WorldSettings& settings, EffectSet effects, float h, TaskPool& pool) {
+                            const WorldSettings& settings, EffectSet effects, float h, TaskPool& pool,
+                            const JointCoupling* joints) {
     settings_ = settings.solver;
     h_ = h;
     friction_ = effects.has(Effect::Friction);
@@ -86,11 +87,18 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         }
         return static_cast<std::uint32_t>(solverIndex_[dense]);
     };
+    const bool jointFilter = joints && !joints->noContactPairs.empty();
+    const auto jointed = [&](const ContactPair& p) {
+        const std::uint32_t slotA = p.aStatic ? s.slot[p.a] : m.slot[p.a];
+        const std::uint32_t slotB = p.bStatic ? s.slot[p.b] : m.slot[p.b];
+        return std::binary_search(joints->noContactPairs.begin(), joints->noContactPairs.end(),
+                                  jointedPairKey(slotA, slotB));
+    };
     std::uint32_t constraints = 0;
     for (std::size_t k = 0; k < manifoldCount; ++k) {
         const ContactPair& p = contacts.pairs[k];
         const bool dynA = !p.aStatic && isDynamic(p.a), dynB = !p.bStatic && isDynamic(p.b);
-        if (!dynA && !dynB) {
+        if ((!dynA && !dynB) || (jointFilter && jointed(p))) {
             colorOf_[k] = kNoColor;
             continue;
         }
@@ -111,6 +119,9 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         colorCounts[color] += 1;
         constraints += 1;
     }
+    // Jointed bodies after the contacts' own, in the joints' order.
+    if (joints)
+        for (std::uint32_t dense : joints->bodies) touch(dense);
     const std::uint32_t bodyCount = static_cast<std::uint32_t>(bodies_.moving.size());
     bodies_.count = bodyCount;
     const std::int32_t stillRow = static_cast<std::int32_t>(bodyCount);

@@ -34,6 +34,19 @@ struct SolverBodies {
     std::uint32_t count = 0;
 };
 
+/// What the joints add to a contact solve (src/solver/joint_solver.h): their moving bodies, which get body rows
+/// even when no manifold touches them, so that joints and contacts share the rows and the iterations; and the pairs
+/// of jointed bodies whose contacts are not solved (collideConnected false), as sorted keys of the two body slots,
+/// lower slot in the high half (jointedPairKey).
+struct JointCoupling {
+    std::vector<std::uint32_t> bodies;
+    std::vector<std::uint64_t> noContactPairs;
+};
+
+inline std::uint64_t jointedPairKey(std::uint32_t slotA, std::uint32_t slotB) {
+    return slotA < slotB ? (std::uint64_t{slotA} << 32 | slotB) : (std::uint64_t{slotB} << 32 | slotA);
+}
+
 struct ContactSolverStats {
     std::uint32_t constraints = 0;  ///< manifolds with at least one dynamic body
     std::uint32_t colors = 0;
@@ -46,9 +59,18 @@ class ContactSolver {
 public:
     /// Builds the constraints for this step's manifolds, starting from `warm` (kMaxManifoldPoints per manifold, as
     /// ContactCache::warmStart gives them). `h` is the substep the solve runs at.
+    /// With `joints`, the joints' bodies get rows too and the manifolds of their no-contact pairs are left out.
     void prepare(const Contacts& contacts, const std::vector<PointImpulse>& warm, const BodyStorage& storage,
-                 const WorldSettings& settings, EffectSet effects, float h, TaskPool& pool);
+                 const WorldSettings& settings, EffectSet effects, float h, TaskPool& pool,
+                 const JointCoupling* joints = nullptr);
     bool empty() const { return stats_.constraints == 0; }
+
+    /// The body rows, shared with the joint solver (valid from loadBodies() to storeVelocities()).
+    SolverBodies& bodies() { return bodies_; }
+    /// Row of a moving body (by dense index) since the last prepare(), or -1 when it has none.
+    std::int32_t solverIndexOf(std::uint32_t dense) const {
+        return dense < solverIndex_.size() ? solverIndex_[dense] : -1;
+    }
 
     /// Copies the touched bodies' velocities in and measures their motion since prepare(). Call at the start of a
     /// substep and after integrate positions (before relaxing).

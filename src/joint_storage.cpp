@@ -1,0 +1,89 @@
+#include "joint_storage.h"
+
+#include <algorithm>
+
+namespace rubble::detail {
+
+JointId JointStore::add(const Joint& joint) {
+    std::uint32_t slot;
+    if (!freeSlots_.empty()) {
+        slot = freeSlots_.back();
+        freeSlots_.pop_back();
+    } else {
+        slot = static_cast<std::uint32_t>(slots_.size());
+        slots_.emplace_back();
+    }
+    Slot& s = slots_[slot];
+    s.generation += 1;
+    if (s.generation == 0) s.generation = 1;
+    s.alive = true;
+    s.dense = static_cast<std::uint32_t>(joints_.size());
+    joints_.push_back(joint);
+    joints_.back().slot = slot;
+    if (joint.broken) brokenCount_ += 1;
+    for (BodyId body : {joint.bodyA, joint.bodyB}) {
+        if (body.index >= jointsOfBody_.size()) jointsOfBody_.resize(body.index + 1);
+        jointsOfBody_[body.index].push_back(slot);
+    }
+    return {slot, s.generation};
+}
+
+void JointStore::unlink(std::uint32_t bodySlot, std::uint32_t jointSlot) {
+    std::vector<std::uint32_t>& list = jointsOfBody_[bodySlot];
+    const auto it = std::find(list.begin(), list.end(), jointSlot);
+    if (it != list.end()) list.erase(it);
+}
+
+void JointStore::remove(JointId id) {
+    const Joint* joint = find(id);
+    if (!joint) return;
+    const std::uint32_t dense = slots_[id.index].dense;
+    unlink(joint->bodyA.index, id.index);
+    unlink(joint->bodyB.index, id.index);
+    if (joint->broken) brokenCount_ -= 1;
+    const std::uint32_t last = size() - 1;
+    if (dense != last) {
+        joints_[dense] = joints_[last];
+        slots_[joints_[dense].slot].dense = dense;
+    }
+    joints_.pop_back();
+    slots_[id.index].alive = false;
+    freeSlots_.push_back(id.index);
+}
+
+Joint* JointStore::find(JointId id) { return const_cast<Joint*>(static_cast<const JointStore*>(this)->find(id)); }
+
+const Joint* JointStore::find(JointId id) const {
+    if (id.isNull() || id.index >= slots_.size()) return nullptr;
+    const Slot& s = slots_[id.index];
+    if (!s.alive || s.generation != id.generation) return nullptr;
+    return &joints_[s.dense];
+}
+
+std::uint32_t JointStore::removeAttachedTo(BodyId body) {
+    if (body.index >= jointsOfBody_.size()) return 0;
+    // Copied: remove() edits the list.
+    const std::vector<std::uint32_t> attached = jointsOfBody_[body.index];
+    for (std::uint32_t slot : attached) remove({slot, slots_[slot].generation});
+    return static_cast<std::uint32_t>(attached.size());
+}
+
+void JointStore::markBroken(std::uint32_t dense) {
+    Joint& j = joints_[dense];
+    if (j.broken) return;
+    j.broken = true;
+    brokenCount_ += 1;
+    brokenReports_.push_back(idOf(dense));
+}
+
+void JointStore::appendEdges(const BodyStorage& bodies,
+                             std::vector<std::pair<std::uint32_t, std::uint32_t>>& edges) const {
+    for (const Joint& j : joints_) {
+        if (j.broken) continue;
+        const BodySlot* a = bodies.find(j.bodyA);
+        const BodySlot* b = bodies.find(j.bodyB);
+        if (a && b && a->set == BodySet::Moving && b->set == BodySet::Moving) edges.emplace_back(a->dense, b->dense);
+    }
+}
+
+}  // namespace rubble::detail

@@ -1,0 +1,391 @@
+#include "solver/joint_solver.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "parallel.h"
+
+namespace rubble::detail {
+namespace {
+
+constexpr std::size_t kJointChunk = 1024;
+constexpr float kPi = 3.14159265358979f;
+
+struct Velocity {
+    Vec3 v, w;
+};
+
+Velocity loadRow(const SolverBodies& b, std::int32_t row) {
+    if (row < 0) return {};
+    return {{b.vx[row], b.vy[row], b.vz[row]}, {b.wx[row], b.wy[row], b.wz[row]}};
+}
+
+void storeRow(SolverBodies& b, std::int32_t row, const Velocity& s) {
+    b.vx[row] = s.v.x, b.vy[row] = s.v.y, b.vz[row] = s.v.z;
+    b.wx[row] = s.w.x, b.wy[row] = s.w.y, b.wz[row] = s.w.z;
+}
+
+/// The two bodies of a joint during one solve: velocities in, impulses applied, velocities out (dynamic sides only).
+struct Bodies {
+    const JointRow& r;
+    Velocity a, b;
+
+    Bodies(const JointRow& row, const SolverBodies& rows)
+        : r(row), a(loadRow(rows, row.rowA)), b(loadRow(rows, row.rowB)) {}
+
+    Vec3 pointVelocity() const { return (b.v + cross(b.w, r.rB)) - (a.v + cross(a.w, r.rA)); }
+    Vec3 angularVelocity() const { return b.w - a.w; }
+
+    /// Impulse p on B at its anchor, -p on A at its anchor.
+    void applyLinear(Vec3 p) {
+        a.v -= p * r.invMassA;
+        a.w -= r.inertiaA * cross(r.rA, p);
+        b.v += p * r.invMassB;
+        b.w += r.inertiaB * cross(r.rB, p);
+    }
+    /// Angular impulse l on B, -l on A.
+    void applyAngular(Vec3 l) {
+        a.w -= r.inertiaA * l;
+        b.w += r.inertiaB * l;
+    }
+    void store(SolverBodies& rows) const {
+        if (r.dynamicA) storeRow(rows, r.rowA, a);
+        if (r.dynamicB) storeRow(rows, r.rowB, b);
+    }
+};
+
+JointSym3 inverse(const JointSym3& m) {
+    const float c00 = m.yy * m.zz - m.yz * m.yz;
+    const float c01 = m.xz * m.yz - m.xy * m.zz;
+    const float c02 = m.xy * m.yz - m.xz * m.yy;
+    const float det = m.xx * c00 + m.xy * c01 + m.xz * c02;
+    if (!(det > 0)) return {};
+    const float inv = 1.0f / det;
+    return {c00 * inv, (m.xx * m.zz - m.xz * m.xz) * inv, (m.xx * m.yy - m.xy * m.xy) * inv, c01 * inv,
+            c02 * inv, (m.xy * m.xz - m.xx * m.yz) * inv};
+}
+
+/// K = m I - [r]x I^-1 [r]x: how an impulse at the anchor changes the anchor's velocity.
+void addPointMass(JointSym3& k, float invMass, const JointSym3& inertia, Vec3 r) {
+    const Vec3 cx = cross(inertia * cross(r, {1, 0, 0}), r);
+    const Vec3 cy = cross(inertia * cross(r, {0, 1, 0}), r);
+    const Vec3 cz = cross(inertia * cross(r, {0, 0, 1}), r);
+    k.xx += invMass + cx.x, k.yy += invMass + cy.y, k.zz += invMass + cz.z;
+    k.xy += cy.x, k.xz += cz.x, k.yz += cz.y;
+}
+
+float angularMass(const JointSym3& inertia, Vec3 a, Vec3 b) { return dot(a, inertia * b); }
+
+void perpendiculars(Vec3 a, Vec3& t1, Vec3& t2) {
+    const Vec3 helper = std::fabs(a.x) < 0.57f ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    t1 = cross(a, helper);
+    t1 = t1 * (1.0f / length(t1));
+    t2 = cross(a, t1);
+}
+
+JointSym3 sum(const JointSym3& a, const JointSym3& b) {
+    return {a.xx + b.xx, a.yy + b.yy, a.zz + b.zz, a.xy + b.xy, a.xz + b.xz, a.yz + b.yz};
+}
+
+struct Softness {
+    float biasRate = 0, massScale = 1, impulseScale = 0;
+};
+
+/// A spring-damper of natural frequency `hertz` and damping ratio `zeta` relative to the row's own effective mass,
+/// solved implicitly over the substep h.
+Softness soft(float hertz, float zeta, float h) {
+    const float omega = 2.0f * kPi * hertz;
+    const float a1 = 2.0f * zeta + h * omega;
+    const float a2 = h * omega * a1;
+    const float a3 = 1.0f / (1.0f + a2);
+    return {omega / a1, a2 * a3, a3};
+}
+
+/// Hooke's spring k with damping c on a row of effective mass 1 / K: gamma = 1 / (h (c + h k)) is the compliance
+/// in impulse units, k / (c + h k) = beta / h the bias rate.
+Softness spring(float k, float c, float K, float h) {
+    const float gamma = 1.0f / (h * (c + h * k));
+    return {k / (c + h * k), K / (K + gamma), gamma / (K + gamma)};
+}
+
+/// Hinge angle of B about A's axis (local to A) from conj(qA) qB conj(reference), in (-pi, pi].
+float hingeAngleOf(Quat qA, Quat qB, Quat reference, Vec3 localAxisA) {
+    const Quat rel = conjugate(qA) * qB * conjugate(reference);
+    float angle = 2.0f * std::atan2(dot(Vec3{rel.x, rel.y, rel.z}, localAxisA), rel.w);
+    if (angle > kPi) angle -= 2.0f * kPi;
+    if (angle <= -kPi) angle += 2.0f * kPi;
+    return angle;
+}
+
+struct Side {
+    Vec3 com;
+    Quat q;
+    Vec3 r;  ///< anchor from the centre of mass, world
+    std::int32_t row = -1;
+    bool dynamic = false;
+    float invMass = 0;
+    JointSym3 inertia;
+};
+
+Side sideOf(const BodyStorage& storage, const ContactSolver& contacts, BodyId id, Vec3 localAnchor) {
+    Side s;
+    const BodySlot& slot = *storage.find(id);
+    const std::uint32_t d = slot.dense;
+    if (slot.set == BodySet::Static) {
+        const StaticBodies& b = storage.statics;
+        s.com = {b.px[d], b.py[d], b.pz[d]};
+        s.q = {b.qx[d], b.qy[d], b.qz[d], b.qw[d]};
+        s.r = rotate(s.q, localAnchor);
+        return s;
+    }
+    const MovingBodies& m = storage.moving;
+    s.com = {m.px[d], m.py[d], m.pz[d]};
+    s.q = {m.qx[d], m.qy[d], m.qz[d], m.qw[d]};
+    s.r = rotate(s.q, localAnchor - Vec3{m.lcx[d], m.lcy[d], m.lcz[d]});
+    s.row = contacts.solverIndexOf(d);
+    s.dynamic = (m.flags[d] & (kFlagKinematic | kFlagFrozen)) == 0 && m.invMass[d] > 0 && s.row >= 0;
+    if (s.dynamic) {
+        s.invMass = m.invMass[d];
+        s.inertia = {m.iwXX[d], m.iwYY[d], m.iwZZ[d], m.iwXY[d], m.iwXZ[d], m.iwYZ[d]};
+    }
+    return s;
+}
+
+}  // namespace
+
+float hingeAngle(const Joint& joint, const BodyStorage& storage) {
+    const auto orientation = [&](BodyId id) {
+        const BodySlot& slot = *storage.find(id);
+        const std::uint32_t d = slot.dense;
+        if (slot.set == BodySet::Static)
+            return Quat{storage.statics.qx[d], storage.statics.qy[d], storage.statics.qz[d], storage.statics.qw[d]};
+        return Quat{storage.moving.qx[d], storage.moving.qy[d], storage.moving.qz[d], storage.moving.qw[d]};
+    };
+    return hingeAngleOf(orientation(joint.bodyA), orientation(joint.bodyB), joint.referenceRotation, joint.localAxisA);
+}
+
+void JointSolver::couple(const JointStore& store, const BodyStorage& storage, JointCoupling& out) const {
+    out.bodies.clear();
+    out.noContactPairs.clear();
+    for (const Joint& j : store.joints()) {
+        if (j.broken) continue;
+        for (BodyId id : {j.bodyA, j.bodyB}) {
+            const BodySlot& slot = *storage.find(id);
+            if (slot.set == BodySet::Moving) out.bodies.push_back(slot.dense);
+        }
+        if (!j.collideConnected) out.noContactPairs.push_back(jointedPairKey(j.bodyA.index, j.bodyB.index));
+    }
+    std::sort(out.noContactPairs.begin(), out.noContactPairs.end());
+    out.noContactPairs.erase(std::unique(out.noContactPairs.begin(), out.noContactPairs.end()),
+                             out.noContactPairs.end());
+}
+
+void JointSolver::prepare(const JointStore& store, const BodyStorage& storage, const ContactSolver& contacts,
+                          const WorldSettings& settings, float h, TaskPool& pool) {
+    h_ = h;
+    const SolverSettings& solver = settings.solver;
+    const Softness rigid = solver.positionCorrection == PositionCorrection::SoftStep
+                               ? soft(std::min(solver.jointHertz, 0.25f / h), solver.jointDampingRatio, h)
+                               : Softness{solver.baumgarte / h, 1.0f, 0.0f};
+    const bool warm = solver.warmStarting;
+    const std::vector<Joint>& joints = store.joints();
+    rows_.resize(joints.size());
+    pool.forChunks(joints.size(), kJointChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const Joint& j = joints[i];
+            JointRow& r = rows_[i];
+            r = JointRow{};
+            r.joint = static_cast<std::uint32_t>(i);
+            r.type = j.type;
+            if (j.broken) continue;
+            const Side A = sideOf(storage, contacts, j.bodyA, j.localAnchorA);
+            const Side B = sideOf(storage, contacts, j.bodyB, j.localAnchorB);
+            if (!A.dynamic && !B.dynamic) continue;
+            r.dynamicA = A.dynamic, r.dynamicB = B.dynamic;
+            r.rowA = A.row, r.rowB = B.row;
+            r.invMassA = A.invMass, r.invMassB = B.invMass;
+            r.inertiaA = A.inertia, r.inertiaB = B.inertia;
+            r.rA = A.r, r.rB = B.r;
+            const Vec3 separation = (B.com + B.r) - (A.com + A.r);
+            Softness softness = rigid;
+
+            if (j.type == JointType::Distance || j.type == JointType::Spring) {
+                const float len = length(separation);
+                if (!(len > 1e-6f)) continue;  // coincident anchors: no line to act along (only a spring's rest)
+                r.axis = separation * (1.0f / len);
+                const Vec3 ra = cross(r.rA, r.axis), rb = cross(r.rB, r.axis);
+                const float K = r.invMassA + r.invMassB + dot(ra, r.inertiaA * ra) + dot(rb, r.inertiaB * rb);
+                if (!(K > 0)) continue;
+                r.axialMass = 1.0f / K;
+                r.axialError = len - j.length;
+                if (j.type == JointType::Spring) {
+                    if (!(j.damping + h * j.stiffness > 0)) continue;  // neither stiffness nor damping: no force
+                    softness = spring(j.stiffness, j.damping, K, h);
+                }
+                if (warm) r.axialImpulse = dot(j.linearImpulse, r.axis);
+            } else {
+                JointSym3 k;
+                addPointMass(k, r.invMassA, r.inertiaA, r.rA);
+                addPointMass(k, r.invMassB, r.inertiaB, r.rB);
+                r.pointMass = inverse(k);
+                r.pointError = separation;
+                if (warm) r.linearImpulse = j.linearImpulse;
+            }
+
+            if (j.type == JointType::Hinge) {
+                const Vec3 axisA = rotate(A.q, j.localAxisA), axisB = rotate(B.q, j.localAxisB);
+                r.hingeAxis = axisA;
+                perpendiculars(axisA, r.t1, r.t2);
+                const JointSym3 inertia = sum(r.inertiaA, r.inertiaB);
+                const float k11 = angularMass(inertia, r.t1, r.t1), k22 = angularMass(inertia, r.t2, r.t2);
+                const float k12 = angularMass(inertia, r.t1, r.t2);
+                const float det = k11 * k22 - k12 * k12;
+                if (det > 0) {
+                    r.angularMass[0] = k22 / det, r.angularMass[1] = k11 / det, r.angularMass[2] = -k12 / det;
+                }
+                // The small rotation that would carry A's axis onto B's, along t1 and t2.
+                const Vec3 misalignment = cross(axisA, axisB);
+                r.angularError[0] = dot(misalignment, r.t1);
+                r.angularError[1] = dot(misalignment, r.t2);
+                const float kAxis = angularMass(inertia, axisA, axisA);
+                r.axisMass = kAxis > 0 ? 1.0f / kAxis : 0.0f;
+                r.limit = j.enableLimit;
+                r.motor = j.enableMotor;
+                if (r.limit) {
+                    const float angle = hingeAngleOf(A.q, B.q, j.referenceRotation, j.localAxisA);
+                    r.lowerError = angle - j.lowerAngle;
+                    r.upperError = j.upperAngle - angle;
+                }
+                r.motorSpeed = j.motorSpeed;
+                r.maxMotorImpulse = j.maxMotorTorque * h;
+                if (warm) {
+                    r.angularImpulse1 = dot(j.angularImpulse, r.t1);
+                    r.angularImpulse2 = dot(j.angularImpulse, r.t2);
+                    r.lowerImpulse = r.limit ? j.lowerImpulse : 0.0f;
+                    r.upperImpulse = r.limit ? j.upperImpulse : 0.0f;
+                    r.motorImpulse = r.motor ? j.motorImpulse : 0.0f;
+                }
+            }
+            r.biasRate = softness.biasRate, r.massScale = softness.massScale, r.impulseScale = softness.impulseScale;
+            r.active = true;
+        }
+    });
+}
+
+void JointSolver::warmStart(SolverBodies& rows) const {
+    for (const JointRow& r : rows_) {
+        if (!r.active) continue;
+        Bodies s(r, rows);
+        if (r.type == JointType::Distance || r.type == JointType::Spring)
+            s.applyLinear(r.axis * r.axialImpulse);
+        else
+            s.applyLinear(r.linearImpulse);
+        if (r.type == JointType::Hinge)
+            s.applyAngular(r.t1 * r.angularImpulse1 + r.t2 * r.angularImpulse2 +
+                           r.hingeAxis * (r.motorImpulse + r.lowerImpulse - r.upperImpulse));
+        s.store(rows);
+    }
+}
+
+namespace {
+
+/// One side of a hinge limit: C = error >= 0 along `sign` * axis, impulse >= 0. A limit not yet reached lets the
+/// bodies approach it by the error within the substep (speculative), so they arrive without overshoot.
+void solveLimit(Bodies& s, const JointRow& r, float error, float sign, float& accumulated, float invH, bool useBias) {
+    const float speed = sign * dot(r.hingeAxis, s.angularVelocity());
+    float bias = 0, massScale = 1, impulseScale = 0;
+    if (error > 0) {
+        bias = error * invH;
+    } else if (useBias) {
+        bias = r.biasRate * error, massScale = r.massScale, impulseScale = r.impulseScale;
+    }
+    const float impulse = -massScale * r.axisMass * (speed + bias) - impulseScale * accumulated;
+    const float total = std::max(accumulated + impulse, 0.0f);
+    const float applied = total - accumulated;
+    accumulated = total;
+    s.applyAngular(r.hingeAxis * (sign * applied));
+}
+
+}  // namespace
+
+void JointSolver::solve(SolverBodies& rows, bool useBias) {
+    const float invH = 1.0f / h_;
+    for (JointRow& r : rows_) {
+        if (!r.active) continue;
+        const bool isSpring = r.type == JointType::Spring;
+        if (isSpring && !useBias) continue;
+        // Relaxing (no bias) makes the rigid rows hard and unbiased; springs keep their softness always.
+        const bool biased = useBias || isSpring;
+        const float biasRate = biased ? r.biasRate : 0.0f;
+        const float massScale = biased ? r.massScale : 1.0f;
+        const float impulseScale = biased ? r.impulseScale : 0.0f;
+        Bodies s(r, rows);
+
+        if (r.type == JointType::Hinge) {
+            if (r.motor) {
+                const float speed = dot(r.hingeAxis, s.angularVelocity());
+                const float old = r.motorImpulse;
+                r.motorImpulse =
+                    std::clamp(old - r.axisMass * (speed - r.motorSpeed), -r.maxMotorImpulse, r.maxMotorImpulse);
+                s.applyAngular(r.hingeAxis * (r.motorImpulse - old));
+            }
+            if (r.limit) {
+                solveLimit(s, r, r.lowerError, 1.0f, r.lowerImpulse, invH, useBias);
+                solveLimit(s, r, r.upperError, -1.0f, r.upperImpulse, invH, useBias);
+            }
+            const Vec3 w = s.angularVelocity();
+            const float c1 = dot(r.t1, w) + biasRate * r.angularError[0];
+            const float c2 = dot(r.t2, w) + biasRate * r.angularError[1];
+            const float l1 =
+                -massScale * (r.angularMass[0] * c1 + r.angularMass[2] * c2) - impulseScale * r.angularImpulse1;
+            const float l2 =
+                -massScale * (r.angularMass[2] * c1 + r.angularMass[1] * c2) - impulseScale * r.angularImpulse2;
+            r.angularImpulse1 += l1;
+            r.angularImpulse2 += l2;
+            s.applyAngular(r.t1 * l1 + r.t2 * l2);
+        }
+
+        if (r.type == JointType::Distance || isSpring) {
+            const float speed = dot(r.axis, s.pointVelocity());
+            const float impulse =
+                -massScale * r.axialMass * (speed + biasRate * r.axialError) - impulseScale * r.axialImpulse;
+            r.axialImpulse += impulse;
+            s.applyLinear(r.axis * impulse);
+        } else {
+            const Vec3 rhs = s.pointVelocity() + r.pointError * biasRate;
+            const Vec3 impulse = (r.pointMass * rhs) * -massScale - r.linearImpulse * impulseScale;
+            r.linearImpulse += impulse;
+            s.applyLinear(impulse);
+        }
+        s.store(rows);
+    }
+}
+
+void JointSolver::finish(JointStore& store) {
+    std::vector<Joint>& joints = store.joints();
+    const float invH = 1.0f / h_;
+    for (JointRow& r : rows_) {
+        Joint& j = joints[r.joint];
+        if (j.broken) continue;
+        if (!r.active) {
+            j.linearImpulse = j.angularImpulse = {};
+            j.lowerImpulse = j.upperImpulse = j.motorImpulse = 0;
+            j.reactionForce = j.reactionTorque = {};
+            continue;
+        }
+        const bool axial = r.type == JointType::Distance || r.type == JointType::Spring;
+        j.linearImpulse = axial ? r.axis * r.axialImpulse : r.linearImpulse;
+        j.angularImpulse = r.t1 * r.angularImpulse1 + r.t2 * r.angularImpulse2;
+        j.lowerImpulse = r.lowerImpulse, j.upperImpulse = r.upperImpulse, j.motorImpulse = r.motorImpulse;
+        j.reactionForce = j.linearImpulse * invH;
+        j.reactionTorque = (j.angularImpulse + r.hingeAxis * (r.motorImpulse + r.lowerImpulse - r.upperImpulse)) * invH;
+        if (length(j.reactionForce) > j.breakForce || length(j.reactionTorque) > j.breakTorque) {
+            store.markBroken(r.joint);
+            j.linearImpulse = j.angularImpulse = {};
+            j.lowerImpulse = j.upperImpulse = j.motorImpulse = 0;
+            r.active = false;
+        }
+    }
+}
+
+}  // namespace rubble::detail
