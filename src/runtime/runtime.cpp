@@ -273,6 +273,7 @@ void Runtime::stop() {
     r.thread.join();
     r.manualClock.store(r.steadyClockTime());
     r.threadRunning.store(false);
+    std::lock_guard lock(r.control);
     r.pauseRequested = false;
 }
 
@@ -317,7 +318,9 @@ void Runtime::singleStep() {
 void Runtime::advance(double seconds) {
     Impl& r = *impl_;
     if (r.threadRunning.load()) fail("Runtime::advance", "the physics thread is running; stop it first");
-    detail::requireNonNegative("Runtime::advance", "seconds", static_cast<float>(seconds));
+    // The clock counts nanoseconds in 64 bits: a million seconds per call is far from overflow and from any use.
+    if (!std::isfinite(seconds) || seconds < 0 || seconds > 1e6)
+        fail("Runtime::advance", "seconds must be in [0, 1e6] (got " + std::to_string(seconds) + ")");
     r.manualClock.store(r.manualClock.load() + seconds);
     r.wakeUp(seconds, r.manualClock.load());
 }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "simd/simd.h"
 #include "world_access.h"
 
 namespace rubble {
@@ -70,6 +71,60 @@ void writeSnapshot(const World& world, bool layoutChanged, Snapshot& out) {
 
 namespace {
 
+/// The pose arrays of a snapshot as plain pointers, so that the blend loop can promise the compiler they do not
+/// overlap (restrict) and vectorise.
+template <class F>
+struct PosesOf {
+    F *px, *py, *pz, *qx, *qy, *qz, *qw;
+};
+struct Poses {
+    static PosesOf<const float> of(const Snapshot& s) {
+        return {s.px.data(), s.py.data(), s.pz.data(), s.qx.data(), s.qy.data(), s.qz.data(), s.qw.data()};
+    }
+    static PosesOf<float> of(Snapshot& s) {
+        return {s.px.data(), s.py.data(), s.pz.data(), s.qx.data(), s.qy.data(), s.qz.data(), s.qw.data()};
+    }
+};
+
+/// Blends slot s (and the lanes after it, for wide F) of a and b with weights 1 - alpha and alpha.
+template <class F>
+void blendLanes(std::size_t s, PosesOf<const float> a, PosesOf<const float> b, float alpha, PosesOf<float> o) {
+    using simd::load;
+    const F wb = simd::broadcast<F>(alpha), wa = simd::broadcast<F>(1.0f - alpha);
+    const F zero = simd::broadcast<F>(0.0f), one = simd::broadcast<F>(1.0f);
+    simd::store(o.px + s, load<F>(a.px + s) * wa + load<F>(b.px + s) * wb);
+    simd::store(o.py + s, load<F>(a.py + s) * wa + load<F>(b.py + s) * wb);
+    simd::store(o.pz + s, load<F>(a.pz + s) * wa + load<F>(b.pz + s) * wb);
+    // Normalised lerp along the shortest arc: q and -q are the same rotation, so the older one is flipped into the
+    // newer one's hemisphere first. For the rotation of one step nlerp is within 1e-4 rad of slerp.
+    const F ax = load<F>(a.qx + s), ay = load<F>(a.qy + s), az = load<F>(a.qz + s), aw = load<F>(a.qw + s);
+    const F bx = load<F>(b.qx + s), by = load<F>(b.qy + s), bz = load<F>(b.qz + s), bw = load<F>(b.qw + s);
+    const F d = ax * bx + ay * by + az * bz + aw * bw;
+    const F ws = simd::select(d < zero, zero - wa, wa);
+    const F x = ax * ws + bx * wb, y = ay * ws + by * wb, z = az * ws + bz * wb, w = aw * ws + bw * wb;
+    const F len2 = x * x + y * y + z * z + w * w;
+    const F inv = simd::select(len2 > zero, one / simd::sqrt(len2), zero);
+    simd::store(o.qx + s, x * inv);
+    simd::store(o.qy + s, y * inv);
+    simd::store(o.qz + s, z * inv);
+    simd::store(o.qw + s, w * inv);
+}
+
+/// Blends the first `count` slots, in SIMD lanes, then gives every slot whose generation differs (a body new in the
+/// newer snapshot) the newer pose.
+void blendPoses(PosesOf<const float> a, PosesOf<const float> b, const std::uint32_t* genA, const std::uint32_t* genB,
+                float alpha, std::size_t count, PosesOf<float> o) {
+    const std::size_t wide = simd::roundDownToLanes<simd::FloatW>(count);
+    std::size_t s = 0;
+    for (; s < wide; s += simd::kLanes) blendLanes<simd::FloatW>(s, a, b, alpha, o);
+    for (; s < count; ++s) blendLanes<float>(s, a, b, alpha, o);
+    for (s = 0; s < count; ++s)
+        if (genA[s] != genB[s]) {
+            o.px[s] = b.px[s], o.py[s] = b.py[s], o.pz[s] = b.pz[s];
+            o.qx[s] = b.qx[s], o.qy[s] = b.qy[s], o.qz[s] = b.qz[s], o.qw[s] = b.qw[s];
+        }
+}
+
 template <class T>
 void copyInto(const std::vector<T>& from, std::vector<T>& to) {
     to.resize(from.size());
@@ -95,27 +150,10 @@ void interpolateSnapshots(const Snapshot& older, const Snapshot& newer, float al
         n - static_cast<std::size_t>(std::count(newer.generation.begin(), newer.generation.end(), 0u)));
     for (auto* a : {&out.px, &out.py, &out.pz, &out.qx, &out.qy, &out.qz, &out.qw}) a->resize(n);
     const std::size_t shared = &older == &newer || alpha == 1.0f ? 0 : std::min(n, older.generation.size());
-    // Bodies in both snapshots blend; the rest (new bodies, and everything when alpha is 1) take the newer pose.
-    // Branch-free per slot so that the loop vectorises: a body not in the older snapshot blends with weight 1.
-    const std::uint32_t* genOld = older.generation.data();
-    const std::uint32_t* genNew = newer.generation.data();
-    for (std::size_t s = 0; s < shared; ++s) {
-        const float a = genOld[s] == genNew[s] ? alpha : 1.0f;
-        const float b = 1.0f - a;
-        out.px[s] = older.px[s] * b + newer.px[s] * a;
-        out.py[s] = older.py[s] * b + newer.py[s] * a;
-        out.pz[s] = older.pz[s] * b + newer.pz[s] * a;
-        // Normalised lerp along the shortest arc: q and -q are the same rotation, so the older one is flipped into
-        // the newer one's hemisphere first. For the rotation of one step nlerp is within 1e-4 rad of slerp.
-        const float d = older.qx[s] * newer.qx[s] + older.qy[s] * newer.qy[s] + older.qz[s] * newer.qz[s] +
-                        older.qw[s] * newer.qw[s];
-        const float bs = d < 0 ? -b : b;
-        const float x = older.qx[s] * bs + newer.qx[s] * a, y = older.qy[s] * bs + newer.qy[s] * a;
-        const float z = older.qz[s] * bs + newer.qz[s] * a, w = older.qw[s] * bs + newer.qw[s] * a;
-        const float len2 = x * x + y * y + z * z + w * w;
-        const float inv = len2 > 0 ? 1.0f / std::sqrt(len2) : 0.0f;
-        out.qx[s] = x * inv, out.qy[s] = y * inv, out.qz[s] = z * inv, out.qw[s] = w * inv;
-    }
+    // Bodies in both snapshots blend; slots past the older snapshot's (and every slot when alpha is 1) copy the newer
+    // pose.
+    blendPoses(Poses::of(older), Poses::of(newer), older.generation.data(), newer.generation.data(), alpha, shared,
+               Poses::of(out));
     std::copy(newer.px.begin() + static_cast<std::ptrdiff_t>(shared), newer.px.end(), out.px.begin() + shared);
     std::copy(newer.py.begin() + static_cast<std::ptrdiff_t>(shared), newer.py.end(), out.py.begin() + shared);
     std::copy(newer.pz.begin() + static_cast<std::ptrdiff_t>(shared), newer.pz.end(), out.pz.begin() + shared);

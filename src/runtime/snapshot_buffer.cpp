@@ -3,19 +3,13 @@
 namespace rubble::detail {
 
 int SnapshotBuffers::beginWrite() {
-    std::uint64_t word = word_.load(std::memory_order_acquire);
-    for (;;) {
-        if (word & claimedBit) readerOlder_ = older(word), readerNewer_ = newer(word);
-        for (std::uint64_t i = 0; i < kCount; ++i)
-            if (i != older(word) && i != newer(word) && i != readerOlder_ && i != readerNewer_)
-                return static_cast<int>(i);
-        // All four are taken: the reader still holds a pair older than the published one, which it has not claimed.
-        // Withdraw the published older buffer so it cannot be claimed; if the reader claims first, retry (its old
-        // pair is then free).
-        const std::uint64_t narrowed = make(sequence(word) + 1, newer(word), newer(word));
-        if (word_.compare_exchange_strong(word, narrowed, std::memory_order_acq_rel, std::memory_order_acquire))
-            return static_cast<int>(older(word));
-    }
+    const std::uint64_t word = word_.load(std::memory_order_acquire);
+    if (word & claimedBit) readerOlder_ = older(word), readerNewer_ = newer(word);
+    // At most four of the five are taken: the published pair and the reader's. A claim the writer has not seen yet
+    // can only be of the published pair, which is excluded anyway.
+    for (std::uint64_t i = 0; i < kCount; ++i)
+        if (i != older(word) && i != newer(word) && i != readerOlder_ && i != readerNewer_) return static_cast<int>(i);
+    return -1;  // unreachable: five buffers, four excluded at most
 }
 
 void SnapshotBuffers::publish(int index) {

@@ -1,14 +1,15 @@
 #pragma once
 // Snapshots from the physics thread to the render thread, lock-free. The render thread interpolates between the two
-// newest snapshots, so it holds a pair, and the physics thread keeps its newest one (the older half of the next
-// pair) while it writes the next: four buffers.
+// newest snapshots, so it holds a pair; the published pair must stay intact for the reader to take it; the physics
+// thread writes the next one beside them: five buffers, so that the writer always finds a free one and never waits.
+// (With four, a reader that missed two publishes holds a pair disjoint from the published one and the writer would
+// have to withdraw the published older snapshot, handing the reader a pair of one snapshot twice.)
 //
 // One atomic word names the published pair (older, newer), a sequence number and a "claimed" bit that the reader
 // sets by compare-and-swap when it takes the pair. The writer writes only into a buffer that is neither in the
-// published pair nor in the pair the reader last claimed (which it learns from the claimed bit, on its loads and on
-// the exchange that publishes). If the reader has not claimed the last two pairs, those four indices are all taken;
-// then the writer withdraws the unclaimed older buffer by a compare-and-swap that publishes (newer, newer) instead.
-// If the reader claims first, that CAS fails and the reader's old pair is free. The writer never waits.
+// published pair nor in the pair the reader last claimed, which it learns from the claimed bit on its load before
+// writing and on the exchange that publishes. A reader can only ever claim the currently published pair, which the
+// writer never touches, so the reader never sees a torn snapshot.
 #include <atomic>
 #include <cstdint>
 
@@ -18,7 +19,7 @@ namespace rubble::detail {
 
 class SnapshotBuffers {
 public:
-    static constexpr int kCount = 4;
+    static constexpr int kCount = 5;
 
     // ---- Writer (one thread) ----
 
@@ -30,12 +31,12 @@ public:
 
     // ---- Reader (one thread) ----
 
-    /// The newest published pair (older may equal newer: the first snapshot, or a pair the writer narrowed). The
-    /// snapshots stay intact until the next acquire. False before the first publish.
+    /// The newest published pair: two consecutive snapshots (older equals newer only for the very first). They stay
+    /// intact until the next acquire. False before the first publish.
     bool acquire(const Snapshot*& older, const Snapshot*& newer);
 
 private:
-    static constexpr std::uint64_t kNone = 7;
+    static constexpr std::uint64_t kNone = 7;  // indices take 3 bits
     static constexpr std::uint64_t claimedBit = 1;
     static std::uint64_t older(std::uint64_t word) { return (word >> 1) & 7; }
     static std::uint64_t newer(std::uint64_t word) { return (word >> 4) & 7; }
