@@ -238,3 +238,19 @@ TEST(RuntimeSnapshots, MatchTheWorldsPosesAndFollowBodiesComingAndGoing) {
     EXPECT_NEAR(next.py[id.index], 8.0f, 0.01f);  // one step of free fall from rest moves it by g dt^2 = 3 mm
     EXPECT_EQ(next.bodyCount, world.bodyCount());
 }
+
+TEST(RuntimeSnapshots, AlphaFromTheClockIsTheTimePastTheNewerStep) {
+    RuntimeSettings settings;
+    settings.rate = 60;
+    Runtime runtime(test::boxesOnFloor(1, 1), settings);
+    const double dt = 1.0 / 60.0;
+    runtime.advance(2.5 * dt);  // steps due at dt and 2 dt ran; the clock is half a step past the newer one
+    EXPECT_DOUBLE_EQ(runtime.clockTime(), 2.5 * dt);
+    const RenderFrame& frame = runtime.interpolate();
+    EXPECT_EQ(frame.step, 2u);
+    EXPECT_EQ(frame.olderStep, 1u);
+    EXPECT_NEAR(frame.alpha, 0.5f, 1e-6f);  // the clock counts whole nanoseconds
+    EXPECT_NEAR(frame.time, 1.5 * dt, 1e-9);
+    EXPECT_EQ(runtime.interpolate(10 * dt).alpha, 1.0f);  // never extrapolates
+    EXPECT_EQ(runtime.interpolate(0).alpha, 0.0f);
+}
