@@ -65,7 +65,7 @@ public:
     virtual void aabb(Vec3 min, Vec3 max, DebugColor color);
     /// Default: three great circles in the body's local planes.
     virtual void sphere(const Transform& pose, float radius, DebugColor color);
-    /// Capsule along the pose's local y axis. Default: the two cap circles, four side lines and two half circles.
+    /// Capsule along the pose's local y axis. Default: two cap circles, four side lines, two half circles per cap.
     virtual void capsule(const Transform& pose, float radius, float halfHeight, DebugColor color);
 };
 
