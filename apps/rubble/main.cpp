@@ -3,16 +3,19 @@
 
 #include <algorithm>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 #include "rubble/build_info.h"
 #include "rubble/error.h"
+#include "rubble/runtime.h"
 #include "rubble/scene.h"
 #include "rubble/world.h"
 #include "trace_writer.h"
@@ -21,7 +24,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: rubble run [SCENE] [--steps N] [--threads T] [--broadphase auto|sap|grid] [--profile] [--trace FILE]\n"
-    "                  [--hash]\n"
+    "                  [--hash] [--realtime SECONDS [--rate HZ]]\n"
     "\n"
     "  SCENE         scene file (JSON); default: the standard scene S1, scenes/s1_pyramid.json\n"
     "  --steps N     number of steps (default: the scene's own)\n"
@@ -29,7 +32,11 @@ constexpr const char* kUsage =
     "  --broadphase  moving-pair algorithm: auto (picked from the scene), sap or grid (default: the scene's)\n"
     "  --profile     print the per-stage table (median ms per step and share of the step)\n"
     "  --trace FILE  write a Chrome trace-event JSON file (open it in Perfetto or chrome://tracing)\n"
-    "  --hash        print a hash of the final state of all bodies\n";
+    "  --hash        print a hash of the final state of all bodies\n"
+    "  --realtime S  run the scene for S seconds of wall time through the Runtime (physics on its own thread at a\n"
+    "                fixed rate, this thread rendering at 60 Hz by interpolation) and print the physics rate, the\n"
+    "                dropped steps and the profile sampled from the rendered frames\n"
+    "  --rate HZ     the Runtime's physics rate for --realtime (default 120)\n";
 
 struct Options {
     std::string scene;
@@ -39,6 +46,8 @@ struct Options {
     bool profile = false;
     bool hash = false;
     std::string trace;
+    double realtime = 0;
+    double rate = 120;
 };
 
 [[noreturn]] void usageError(const std::string& message) {
@@ -92,6 +101,10 @@ Options parseOptions(int argc, char** argv) {
             o.hash = true;
         else if (a == "--trace")
             o.trace = value();
+        else if (a == "--realtime")
+            o.realtime = static_cast<double>(parseCount(a, value(), 1, 3600));
+        else if (a == "--rate")
+            o.rate = static_cast<double>(parseCount(a, value(), 1, 100000));
         else if (a == "--help" || a == "-h") {
             std::fputs(kUsage, stdout);
             std::exit(0);
@@ -147,6 +160,64 @@ std::string effectList(rubble::EffectSet set) {
     return out.empty() ? "none" : out;
 }
 
+void printStageTable(const std::vector<std::vector<double>>& stageMs, const std::vector<double>& stepMs) {
+    const double stepMedian = median(stepMs);
+    std::printf("\n%-22s %8s %12s %8s\n", "stage", "ran", "median ms", "share");
+    for (int k = 0; k < rubble::kStageCount; ++k) {
+        const auto stage = static_cast<rubble::Stage>(k);
+        const double m = median(stageMs[k]);
+        std::printf("%-22s %8zu %12.4f %7.1f%%\n", std::string(rubble::stageName(stage)).c_str(), stageMs[k].size(), m,
+                    stepMedian > 0 ? 100.0 * m / stepMedian : 0.0);
+    }
+    std::printf("%-22s %8zu %12.4f %7.1f%%\n", "step", stepMs.size(), stepMedian, 100.0);
+}
+
+/// --realtime: the scene through the Runtime, with this thread standing in for a 60 Hz render loop.
+int runRealtime(const Options& options, rubble::World world) {
+    rubble::RuntimeSettings settings;
+    settings.rate = options.rate;
+    rubble::Runtime runtime(std::move(world), settings);
+    std::vector<std::vector<double>> stageMs(rubble::kStageCount);
+    std::vector<double> stepMs, interpolateMs;
+    std::uint64_t lastStep = 0;
+    using Clock = std::chrono::steady_clock;
+    const auto frame = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / 60.0));
+    runtime.start();
+    const auto begin = Clock::now();
+    const auto end =
+        begin + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.realtime));
+    for (auto next = begin + frame; Clock::now() < end; next += frame) {
+        const auto t0 = Clock::now();
+        const rubble::RenderFrame& f = runtime.interpolate();
+        interpolateMs.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+        if (f.step != lastStep && f.slotCount() > 0) {  // sample the profile of the newest step once
+            lastStep = f.step;
+            stepMs.push_back(f.profile.stepMs);
+            for (int k = 0; k < rubble::kStageCount; ++k)
+                if (f.profile.stages[k].ran) stageMs[k].push_back(f.profile.stages[k].ms);
+        }
+        std::this_thread::sleep_until(next);
+    }
+    runtime.stop();
+    const double wall = std::chrono::duration<double>(Clock::now() - begin).count();
+    const rubble::RuntimeStats stats = runtime.stats();
+    std::printf("\nrealtime   %.2f s wall, physics at %.6g Hz (step %.6g s), at most %d steps per wake-up\n", wall,
+                settings.rate, 1.0 / settings.rate, settings.maxStepsPerWake);
+    std::printf("physics    %llu steps = %.1f Hz (%.1f Hz in the last window), simulated/wall %.3f\n",
+                static_cast<unsigned long long>(stats.steps), static_cast<double>(stats.steps) / wall, stats.physicsHz,
+                stats.slowdown);
+    std::printf("dropped    %llu steps (%.3f s), most steps in one wake-up %u%s\n",
+                static_cast<unsigned long long>(stats.droppedSteps), stats.droppedSeconds, stats.maxStepsPerWake,
+                stats.behind ? ", behind at the end" : "");
+    std::printf("render     %zu frames, interpolate median %.4f ms\n", interpolateMs.size(), median(interpolateMs));
+    std::printf("\nprofile    sampled from %zu steps shown by the frames:", stepMs.size());
+    printStageTable(stageMs, stepMs);
+    if (options.hash)
+        std::printf("\nstate hash %016llx (depends on the machine's timing)\n",
+                    static_cast<unsigned long long>(runtime.world().stateHash()));
+    return 0;
+}
+
 int run(const Options& options) {
     rubble::Scene scene = rubble::loadScene(options.scene);
     if (options.threads >= 0) scene.settings.threads = options.threads;
@@ -174,6 +245,7 @@ int run(const Options& options) {
     std::printf("broad      %s (setting)\n", std::string(rubble::broadPhaseName(scene.settings.broadPhase)).c_str());
     std::printf("effects    declared: %s\n           simulated: %s\n", effectList(scene.settings.effects).c_str(),
                 effectList(world.activeEffects()).c_str());
+    if (options.realtime > 0) return runRealtime(options, std::move(world));
 
     std::vector<std::vector<double>> stageMs(rubble::kStageCount);
     std::vector<double> stepMs;
@@ -198,14 +270,7 @@ int run(const Options& options) {
 
     const double stepMedian = median(stepMs);
     if (options.profile) {
-        std::printf("\n%-22s %8s %12s %8s\n", "stage", "ran", "median ms", "share");
-        for (int k = 0; k < rubble::kStageCount; ++k) {
-            const auto stage = static_cast<rubble::Stage>(k);
-            const double m = median(stageMs[k]);
-            std::printf("%-22s %8zu %12.4f %7.1f%%\n", std::string(rubble::stageName(stage)).c_str(), stageMs[k].size(),
-                        m, stepMedian > 0 ? 100.0 * m / stepMedian : 0.0);
-        }
-        std::printf("%-22s %8zu %12.4f %7.1f%%\n", "step", stepMs.size(), stepMedian, 100.0);
+        printStageTable(stageMs, stepMs);
         const rubble::Profile& last = world.lastProfile();
         std::printf("\ncounts     bodies %u, moving %u (last step)\n", world.bodyCount(), last.movingCount);
         std::printf("broad      %s; pairs: %u moving-moving, %u moving-static, %u moving-mesh (%u triangles)\n",

@@ -93,7 +93,7 @@ std::optional<BroadPhaseKind> broadPhaseFromName(std::string_view name);
 /// World-wide settings. Every knob that trades accuracy for time is here.
 struct WorldSettings {
     Vec3 gravity{0, -9.81f, 0};
-    float timeStep = 1.0f / 60.0f;  ///< the fixed step the runner and runtime use, s
+    float timeStep = 1.0f / 60.0f;  ///< the fixed step the runner uses (a Runtime steps at its own rate), s
     int substeps = 1;
     /// Contact solver iterations per substep. Position iterations are the relax iterations of the soft step and
     /// the pseudo-velocity iterations of split impulses; Baumgarte has none.

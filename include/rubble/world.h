@@ -17,6 +17,12 @@
 
 namespace rubble {
 
+class DebugDraw;
+struct DebugDrawOptions;
+namespace detail {
+struct WorldAccess;
+}
+
 /// A physics world: shapes, bodies and the step that moves them.
 /// Every function that takes a BodyId or ShapeId throws rubble::Error when the handle is null, stale or from
 /// another world, and every setter refuses non-finite or out-of-range input the same way.
@@ -168,9 +174,17 @@ public:
     std::size_t overlapShape(ShapeId shape, const Transform& pose, std::vector<BodyId>& bodies,
                              const QueryFilter& filter = {}) const;
 
+    // -----------------------------------------------------------------------------------------------------------
+    // Debug draw (include/rubble/debug_draw.h, src/debug_draw.cpp)
+
+    /// Draws what `options` selects (shapes at their bodies' poses, AABBs, last step's contact points and normals,
+    /// sleeping state) into `draw`. Const: may run between steps on any one thread.
+    void debugDraw(DebugDraw& draw, const DebugDrawOptions& options) const;
+
     struct Impl;
 
 private:
+    friend struct detail::WorldAccess;  // the runtime (src/runtime/) reads the body arrays to publish snapshots
     std::unique_ptr<Impl> impl_;
 };
 

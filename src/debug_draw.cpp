@@ -1,0 +1,211 @@
+// Debug draw: the default line drawings of DebugDraw's solid calls, and World::debugDraw, which walks the bodies,
+// their shapes (compound children, hull edges, mesh and heightfield triangles) and the last step's contacts.
+#include "rubble/debug_draw.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <optional>
+
+#include "broadphase/static_bvh.h"
+#include "world_impl.h"
+
+namespace rubble {
+
+namespace {
+
+constexpr int kCircleSegments = 16;
+
+Transform compose(const Transform& outer, const Transform& inner) {
+    return {apply(outer, inner.position), outer.rotation * inner.rotation};
+}
+
+/// Circle of `radius` about `center` in the plane spanned by the pose's local axes u and v.
+void circle(DebugDraw& draw, const Transform& pose, Vec3 center, Vec3 u, Vec3 v, float radius, float fromAngle,
+            float toAngle, DebugColor color) {
+    Vec3 previous{};
+    for (int i = 0; i <= kCircleSegments; ++i) {
+        const float t = fromAngle + (toAngle - fromAngle) * static_cast<float>(i) / kCircleSegments;
+        const Vec3 local = center + u * (radius * std::cos(t)) + v * (radius * std::sin(t));
+        const Vec3 p = apply(pose, local);
+        if (i > 0) draw.line(previous, p, color);
+        previous = p;
+    }
+}
+
+}  // namespace
+
+void DebugDraw::triangle(Vec3 a, Vec3 b, Vec3 c, DebugColor color) {
+    line(a, b, color);
+    line(b, c, color);
+    line(c, a, color);
+}
+
+void DebugDraw::point(Vec3 p, float size, DebugColor color) {
+    const float h = size * 0.5f;
+    line(p - Vec3{h, 0, 0}, p + Vec3{h, 0, 0}, color);
+    line(p - Vec3{0, h, 0}, p + Vec3{0, h, 0}, color);
+    line(p - Vec3{0, 0, h}, p + Vec3{0, 0, h}, color);
+}
+
+void DebugDraw::box(const Transform& pose, Vec3 e, DebugColor color) {
+    Vec3 corner[8];
+    for (int i = 0; i < 8; ++i)
+        corner[i] = apply(pose, {(i & 1) ? e.x : -e.x, (i & 2) ? e.y : -e.y, (i & 4) ? e.z : -e.z});
+    // Corners differing in one bit of their index share an edge.
+    for (int i = 0; i < 8; ++i)
+        for (int bit = 1; bit < 8; bit <<= 1)
+            if (!(i & bit)) line(corner[i], corner[i | bit], color);
+}
+
+void DebugDraw::aabb(Vec3 min, Vec3 max, DebugColor color) {
+    const Vec3 center = (min + max) * 0.5f, half = (max - min) * 0.5f;
+    box(Transform{center, Quat{}}, half, color);
+}
+
+void DebugDraw::sphere(const Transform& pose, float radius, DebugColor color) {
+    const float full = 2 * std::numbers::pi_v<float>;
+    circle(*this, pose, {}, {1, 0, 0}, {0, 1, 0}, radius, 0, full, color);
+    circle(*this, pose, {}, {0, 1, 0}, {0, 0, 1}, radius, 0, full, color);
+    circle(*this, pose, {}, {0, 0, 1}, {1, 0, 0}, radius, 0, full, color);
+}
+
+void DebugDraw::capsule(const Transform& pose, float radius, float halfHeight, DebugColor color) {
+    const float pi = std::numbers::pi_v<float>;
+    const Vec3 top{0, halfHeight, 0}, bottom{0, -halfHeight, 0};
+    circle(*this, pose, top, {1, 0, 0}, {0, 0, 1}, radius, 0, 2 * pi, color);
+    circle(*this, pose, bottom, {1, 0, 0}, {0, 0, 1}, radius, 0, 2 * pi, color);
+    for (Vec3 side : {Vec3{radius, 0, 0}, Vec3{-radius, 0, 0}, Vec3{0, 0, radius}, Vec3{0, 0, -radius}})
+        line(apply(pose, top + side), apply(pose, bottom + side), color);
+    circle(*this, pose, top, {1, 0, 0}, {0, 1, 0}, radius, 0, pi, color);
+    circle(*this, pose, top, {0, 0, 1}, {0, 1, 0}, radius, 0, pi, color);
+    circle(*this, pose, bottom, {1, 0, 0}, {0, 1, 0}, radius, pi, 2 * pi, color);
+    circle(*this, pose, bottom, {0, 0, 1}, {0, 1, 0}, radius, pi, 2 * pi, color);
+}
+
+namespace {
+
+/// The island a moving body belongs to, for kDrawIslands. Islands are not built yet; the islands stage returns the
+/// body's island index here (and debugDraw then colours by it). Until then no body has one.
+std::optional<std::uint32_t> islandOf(const World::Impl&, std::uint32_t /*movingIndex*/) { return std::nullopt; }
+
+DebugColor islandColor(std::uint32_t island) {
+    // A fixed hash spread over hues, so an island keeps its colour from frame to frame.
+    const std::uint32_t h = island * 2654435761u;
+    return {static_cast<std::uint8_t>(64 + (h >> 24) % 192), static_cast<std::uint8_t>(64 + (h >> 16) % 192),
+            static_cast<std::uint8_t>(64 + (h >> 8) % 192), 255};
+}
+
+struct Drawer {
+    const World::Impl& w;
+    DebugDraw& draw;
+    const DebugDrawOptions& options;
+    std::uint32_t trianglesLeft;
+
+    bool inRegion(Vec3 min, Vec3 max) const {
+        if (!options.regionMin || !options.regionMax) return true;
+        const Vec3 rmin = *options.regionMin, rmax = *options.regionMax;
+        return min.x <= rmax.x && rmin.x <= max.x && min.y <= rmax.y && rmin.y <= max.y && min.z <= rmax.z &&
+               rmin.z <= max.z;
+    }
+
+    void triangle(const Transform& pose, Vec3 a, Vec3 b, Vec3 c, DebugColor color) {
+        if (trianglesLeft == 0) return;
+        const Vec3 wa = apply(pose, a), wb = apply(pose, b), wc = apply(pose, c);
+        const Vec3 min{std::min({wa.x, wb.x, wc.x}), std::min({wa.y, wb.y, wc.y}), std::min({wa.z, wb.z, wc.z})};
+        const Vec3 max{std::max({wa.x, wb.x, wc.x}), std::max({wa.y, wb.y, wc.y}), std::max({wa.z, wb.z, wc.z})};
+        if (!inRegion(min, max)) return;
+        draw.triangle(wa, wb, wc, color);
+        --trianglesLeft;
+    }
+
+    void shape(const detail::Shape& s, const Transform& pose, DebugColor color) {
+        using detail::ShapeKind;
+        switch (s.kind) {
+            case ShapeKind::Sphere:
+                draw.sphere(pose, s.radius, color);
+                break;
+            case ShapeKind::Box:
+                draw.box(pose, s.halfExtents, color);
+                break;
+            case ShapeKind::Capsule:
+                draw.capsule(pose, s.radius, s.halfHeight, color);
+                break;
+            case ShapeKind::ConvexHull: {
+                const detail::ConvexHull& hull = *s.hull;
+                for (std::size_t e = 0; e + 1 < hull.edges.size(); e += 2)
+                    draw.line(apply(pose, hull.vertices[hull.edges[e]]), apply(pose, hull.vertices[hull.edges[e + 1]]),
+                              color);
+                break;
+            }
+            case ShapeKind::Compound:
+                for (const detail::CompoundChild& child : s.children)
+                    shape(*child.shape, compose(pose, child.local), color);
+                break;
+            case ShapeKind::TriangleMesh:
+                if (options.flags & kDrawMeshTriangles) {
+                    const detail::TriangleMesh& mesh = *s.mesh;
+                    for (std::uint32_t t = 0; t < mesh.triangleCount() && trianglesLeft > 0; ++t)
+                        triangle(pose, mesh.vertices[mesh.indices[3 * t]], mesh.vertices[mesh.indices[3 * t + 1]],
+                                 mesh.vertices[mesh.indices[3 * t + 2]], color);
+                }
+                break;
+            case ShapeKind::Heightfield:
+                if (options.flags & kDrawMeshTriangles) {
+                    const detail::Heightfield& field = *s.heightfield;
+                    const std::uint32_t count = detail::heightfieldTriangleCount(field);
+                    for (std::uint32_t t = 0; t < count && trianglesLeft > 0; ++t) {
+                        const auto v = detail::heightfieldTriangle(field, t);
+                        triangle(pose, v[0], v[1], v[2], color);
+                    }
+                }
+                break;
+        }
+    }
+
+    void body(const detail::Shape& s, const Transform& pose, DebugColor color) {
+        const detail::Aabb bounds = detail::worldBounds(s, pose);
+        if (!inRegion(bounds.min, bounds.max)) return;
+        if (options.flags & kDrawShapes) shape(s, pose, color);
+        if (options.flags & kDrawAabbs) draw.aabb(bounds.min, bounds.max, options.colors.aabb);
+    }
+};
+
+}  // namespace
+
+void World::debugDraw(DebugDraw& draw, const DebugDrawOptions& options) const {
+    const Impl& w = *impl_;
+    Drawer drawer{w, draw, options, options.maxTriangles};
+    const DebugDrawColors& colors = options.colors;
+
+    const detail::StaticBodies& s = w.bodies.statics;
+    for (std::uint32_t i = 0; i < s.size(); ++i)
+        drawer.body(w.shapes[s.shape[i]], {{s.px[i], s.py[i], s.pz[i]}, {s.qx[i], s.qy[i], s.qz[i], s.qw[i]}},
+                    colors.staticBody);
+
+    const detail::MovingBodies& m = w.bodies.moving;
+    for (std::uint32_t i = 0; i < m.size(); ++i) {
+        const std::uint8_t flags = m.flags[i];
+        DebugColor color = (flags & detail::kFlagKinematic) ? colors.kinematicBody : colors.dynamicBody;
+        if (options.flags & kDrawIslands)
+            if (const auto island = islandOf(w, i)) color = islandColor(*island);
+        if ((options.flags & kDrawSleeping) && (flags & detail::kFlagAsleep)) color = colors.asleep;
+        if (flags & detail::kFlagFrozen) color = colors.frozen;
+        const Quat q = w.orientationOf(i);
+        const Vec3 origin = w.comOf(i) - rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]});
+        drawer.body(w.shapes[m.shape[i]], {origin, q}, color);
+    }
+
+    if (options.flags & kDrawContacts) {
+        // Contact points are kept in world space, so they stay drawable after bodies were removed since the step.
+        for (const detail::Manifold& manifold : w.contacts.manifolds)
+            for (int p = 0; p < manifold.pointCount; ++p) {
+                const Vec3 at = manifold.points[p].position;
+                if (!drawer.inRegion(at, at)) continue;
+                draw.point(at, options.pointSize, colors.contactPoint);
+                draw.line(at, at + manifold.normal * options.normalLength, colors.contactNormal);
+            }
+    }
+}
+
+}  // namespace rubble
