@@ -14,6 +14,7 @@ enum class Stage : std::uint8_t {
     BroadPhase,
     NarrowPhase,
     ContactCache,
+    Islands,
     Solver,
     IntegratePositions,
     Count,
@@ -51,6 +52,9 @@ struct Profile {
     std::uint32_t constraints = 0;        ///< contact manifolds the solver works on (a dynamic body on one side)
     std::uint32_t colors = 0;             ///< graph colours of the contact constraints
     float laneOccupancy = 0;              ///< filled SIMD lanes over lanes used by the solver, in [0, 1]
+    std::uint32_t islands = 0;            ///< islands of dynamic bodies (a body alone is an island), asleep included
+    std::uint32_t largestIsland = 0;      ///< bodies in the largest island
+    std::uint32_t sleepingBodies = 0;     ///< bodies asleep after the step
 
     const StageTiming& operator[](Stage s) const { return stages[static_cast<int>(s)]; }
     StageTiming& operator[](Stage s) { return stages[static_cast<int>(s)]; }
