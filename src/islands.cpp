@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <bit>
 
 #include "parallel.h"
 
@@ -74,32 +73,22 @@ std::uint32_t islandOfManifold(const ContactPair& p, const std::vector<std::uint
     return kNoIsland;
 }
 
-/// starts[k] = first item of island k in items sorted by island (high half), for k in [0, islands]; islands without
-/// items get empty ranges.
-void rangeStarts(const AlignedVector<std::uint64_t>& items, std::size_t n, std::uint32_t islands, TaskPool& pool,
-                 std::vector<std::uint32_t>& starts) {
-    starts.resize(std::size_t{islands} + 1);
-    starts[islands] = static_cast<std::uint32_t>(n);
-    const std::uint64_t* first = items.data();
-    pool.forChunks(islands, kIslandChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-        const std::uint64_t* at = std::lower_bound(first, first + n, std::uint64_t{begin} << 32);
-        for (std::size_t k = begin; k < end; ++k) {
-            // Islands are visited in order, so each search starts where the last ended.
-            at = std::lower_bound(at, first + n, std::uint64_t{k} << 32);
-            starts[k] = static_cast<std::uint32_t>(at - first);
-        }
-    });
-}
-
-/// Sorts items by island (stably: index order kept within) and splits them into rows.
-void sortIntoRows(AlignedVector<std::uint64_t>& items, std::size_t n, std::uint32_t islands, RadixSortScratch& scratch,
-                  TaskPool& pool, std::vector<std::uint32_t>& starts, std::vector<std::uint32_t>& indices) {
-    if (islands > 1) radixSortBits(items.data(), n, 32, std::bit_width(islands - 1), scratch, pool);
-    rangeStarts(items, n, islands, pool, starts);
-    indices.resize(n);
-    pool.forChunks(n, kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-        for (std::size_t p = begin; p < end; ++p) indices[p] = static_cast<std::uint32_t>(items[p]);
-    });
+/// Rows by a counting sort: items visited in index order land in index order within their island. One pass to
+/// count, one to place; measured faster than a parallel radix sort of (island, index) keys at every size tried
+/// (perf/islands_perf.cpp), since the items are already in index order and the counts fit in cache.
+template <class IslandOf>
+void countingSort(std::uint32_t islands, std::size_t items, IslandOf&& islandOf, std::vector<std::uint32_t>& starts,
+                  std::vector<std::uint32_t>& rows) {
+    starts.assign(std::size_t{islands} + 1, 0);
+    for (std::size_t x = 0; x < items; ++x)
+        if (const std::uint32_t k = islandOf(x); k != kNoIsland) starts[k + 1] += 1;
+    for (std::uint32_t k = 0; k < islands; ++k) starts[k + 1] += starts[k];
+    rows.resize(starts[islands]);
+    for (std::size_t x = 0; x < items; ++x)
+        if (const std::uint32_t k = islandOf(x); k != kNoIsland) rows[starts[k]++] = static_cast<std::uint32_t>(x);
+    // Placing advanced each start to the next island's: shift back.
+    for (std::uint32_t k = islands; k > 0; --k) starts[k] = starts[k - 1];
+    starts[0] = 0;
 }
 
 }  // namespace
@@ -121,11 +110,11 @@ void IslandBuilder::build(const Contacts& contacts, std::span<const IslandEdge> 
         }
     });
 
-    // Number the roots in index order: per-chunk counts of roots and of joined bodies, prefix-summed by one thread.
+    // Number the roots in index order: per-chunk root counts, prefix-summed by one thread.
     const std::size_t chunks = TaskPool::chunkCount(n, kBodyChunk);
-    chunkCounts_.assign(2 * chunks, 0);
+    chunkCounts_.assign(chunks, 0);
     pool.forChunks(n, kBodyChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
-        std::uint32_t roots = 0, joined = 0;
+        std::uint32_t roots = 0;
         for (std::size_t i = begin; i < end; ++i) {
             if (!joinsIslands(bodies.flags[i])) {
                 out.islandOf[i] = kNoIsland;
@@ -134,33 +123,26 @@ void IslandBuilder::build(const Contacts& contacts, std::span<const IslandEdge> 
             const std::uint32_t r = findConcurrent(parent_, static_cast<std::uint32_t>(i));
             out.islandOf[i] = r;
             roots += r == i;
-            ++joined;
         }
-        chunkCounts_[2 * c] = roots;
-        chunkCounts_[2 * c + 1] = joined;
+        chunkCounts_[c] = roots;
     });
-    std::uint32_t islands = 0, joined = 0;
+    std::uint32_t islands = 0;
     for (std::size_t c = 0; c < chunks; ++c) {
-        const std::uint32_t roots = chunkCounts_[2 * c], members = chunkCounts_[2 * c + 1];
-        chunkCounts_[2 * c] = islands, chunkCounts_[2 * c + 1] = joined;
-        islands += roots, joined += members;
+        const std::uint32_t roots = chunkCounts_[c];
+        chunkCounts_[c] = islands;
+        islands += roots;
     }
     pool.forChunks(n, kBodyChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
-        std::uint32_t next = chunkCounts_[2 * c];
+        std::uint32_t next = chunkCounts_[c];
         for (std::size_t i = begin; i < end; ++i)
             if (out.islandOf[i] == i) rank_[i] = next++;
     });
-    items_.resize(joined);
-    pool.forChunks(n, kBodyChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
-        std::uint32_t at = chunkCounts_[2 * c + 1];
-        for (std::size_t i = begin; i < end; ++i) {
-            if (out.islandOf[i] == kNoIsland) continue;
-            const std::uint32_t island = rank_[out.islandOf[i]];
-            out.islandOf[i] = island;
-            items_[at++] = (std::uint64_t{island} << 32) | i;
-        }
+    pool.forChunks(n, kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t i = begin; i < end; ++i)
+            if (out.islandOf[i] != kNoIsland) out.islandOf[i] = rank_[out.islandOf[i]];
     });
-    sortIntoRows(items_, joined, islands, sortScratch_, pool, out.bodyStart, out.bodies);
+    countingSort(
+        islands, n, [&](std::size_t i) { return out.islandOf[i]; }, out.bodyStart, out.bodies);
 
     std::vector<std::uint32_t>& largest = chunkCounts_;
     largest.assign(TaskPool::chunkCount(islands, kIslandChunk), 0);
@@ -171,34 +153,14 @@ void IslandBuilder::build(const Contacts& contacts, std::span<const IslandEdge> 
     });
     out.largest = largest.empty() ? 0 : *std::max_element(largest.begin(), largest.end());
 
-    assignManifolds(contacts, pool, out);
+    assignManifolds(contacts, out);
 }
 
-void IslandBuilder::assignManifolds(const Contacts& contacts, TaskPool& pool, Islands& out) {
-    const std::size_t m = contacts.pairs.size();
-    const std::size_t chunks = TaskPool::chunkCount(m, kEdgeChunk);
-    chunkCounts_.assign(chunks, 0);
-    pool.forChunks(m, kEdgeChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
-        std::uint32_t count = 0;
-        for (std::size_t k = begin; k < end; ++k)
-            count += islandOfManifold(contacts.pairs[k], out.islandOf) != kNoIsland;
-        chunkCounts_[c] = count;
-    });
-    std::uint32_t total = 0;
-    for (std::size_t c = 0; c < chunks; ++c) {
-        const std::uint32_t count = chunkCounts_[c];
-        chunkCounts_[c] = total;
-        total += count;
-    }
-    items_.resize(total);
-    pool.forChunks(m, kEdgeChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
-        std::uint32_t at = chunkCounts_[c];
-        for (std::size_t k = begin; k < end; ++k) {
-            const std::uint32_t island = islandOfManifold(contacts.pairs[k], out.islandOf);
-            if (island != kNoIsland) items_[at++] = (std::uint64_t{island} << 32) | k;
-        }
-    });
-    sortIntoRows(items_, total, out.count(), sortScratch_, pool, out.manifoldStart, out.manifolds);
+void IslandBuilder::assignManifolds(const Contacts& contacts, Islands& out) {
+    countingSort(
+        out.count(), contacts.pairs.size(),
+        [&](std::size_t m) { return islandOfManifold(contacts.pairs[m], out.islandOf); }, out.manifoldStart,
+        out.manifolds);
 }
 
 void IslandBuilder::buildSerial(const Contacts& contacts, std::span<const IslandEdge> extraEdges,
@@ -227,26 +189,14 @@ void IslandBuilder::buildSerial(const Contacts& contacts, std::span<const Island
         }
         size[out.islandOf[i]] += 1;
     }
-    const auto countingSort = [](std::vector<std::uint32_t>& sizes, std::vector<std::uint32_t>& starts,
-                                 std::vector<std::uint32_t>& rows, auto&& islandOfItem, std::size_t items) {
-        starts.assign(sizes.size() + 1, 0);
-        for (std::size_t k = 0; k < sizes.size(); ++k) starts[k + 1] = starts[k] + sizes[k];
-        rows.resize(starts.back());
-        std::vector<std::uint32_t> next(starts.begin(), starts.end() - 1);
-        for (std::size_t x = 0; x < items; ++x) {
-            const std::uint32_t k = islandOfItem(x);
-            if (k != kNoIsland) rows[next[k]++] = static_cast<std::uint32_t>(x);
-        }
-    };
     out.largest = size.empty() ? 0 : *std::max_element(size.begin(), size.end());
     countingSort(
-        size, out.bodyStart, out.bodies, [&](std::size_t i) { return out.islandOf[i]; }, n);
-    std::fill(size.begin(), size.end(), 0);
-    for (const ContactPair& p : contacts.pairs)
-        if (const std::uint32_t k = islandOfManifold(p, out.islandOf); k != kNoIsland) size[k] += 1;
+        static_cast<std::uint32_t>(size.size()), n, [&](std::size_t i) { return out.islandOf[i]; }, out.bodyStart,
+        out.bodies);
     countingSort(
-        size, out.manifoldStart, out.manifolds,
-        [&](std::size_t m) { return islandOfManifold(contacts.pairs[m], out.islandOf); }, contacts.pairs.size());
+        static_cast<std::uint32_t>(size.size()), contacts.pairs.size(),
+        [&](std::size_t m) { return islandOfManifold(contacts.pairs[m], out.islandOf); }, out.manifoldStart,
+        out.manifolds);
 }
 
 }  // namespace rubble::detail

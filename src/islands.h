@@ -14,7 +14,6 @@
 #include <vector>
 
 #include "body_storage.h"
-#include "broadphase/radix_sort.h"
 #include "narrowphase/narrowphase_stage.h"
 
 namespace rubble::detail {
@@ -47,22 +46,21 @@ class IslandBuilder {
 public:
     /// Islands of the moving bodies joined by `contacts` and `extraEdges`, in parallel: a lock-free union-find that
     /// links the larger root under the smaller by compare-and-swap (so every root is its island's smallest index,
-    /// whatever order the links happen in), then canonical rows by a stable parallel radix sort.
+    /// whatever order the links happen in), islands numbered by parallel chunked prefix sums, then the rows by a
+    /// counting sort.
     void build(const Contacts& contacts, std::span<const IslandEdge> extraEdges, const MovingBodies& bodies,
                TaskPool& pool, Islands& out);
-    /// The same result on one thread with a plain union-find and counting sorts: the reference the parallel build
-    /// is tested and measured against.
+    /// The same result on one thread with a plain union-find: the reference the parallel build is tested and
+    /// measured against.
     static void buildSerial(const Contacts& contacts, std::span<const IslandEdge> extraEdges,
                             const MovingBodies& bodies, Islands& out);
     /// Recomputes only the manifold rows (after manifolds were appended to `contacts`; the bodies' islands stand).
-    void assignManifolds(const Contacts& contacts, TaskPool& pool, Islands& out);
+    static void assignManifolds(const Contacts& contacts, Islands& out);
 
 private:
     std::vector<std::uint32_t> parent_;
     std::vector<std::uint32_t> rank_;  ///< at a root: its island's number
     std::vector<std::uint32_t> chunkCounts_;
-    AlignedVector<std::uint64_t> items_;  ///< island << 32 | index, sorted by island
-    RadixSortScratch sortScratch_;
 };
 
 }  // namespace rubble::detail

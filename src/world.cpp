@@ -538,7 +538,7 @@ void runIslands(World::Impl& w, bool sleeping) {
         w.islandBuilder.build(w.contacts, w.islandEdges, w.bodies.moving, *w.pool, w.islands);
         if (sleeping && w.sleeping.wakeTouched(w.islands, w.bodies, w.integrationScratch, w.contacts, w.impulses,
                                                w.contactCache, *w.pool))
-            w.islandBuilder.assignManifolds(w.contacts, *w.pool, w.islands);
+            w.islandBuilder.assignManifolds(w.contacts, w.islands);
     }
     profile.islands = w.islands.count();
     profile.largestIsland = w.islands.largest;

@@ -162,7 +162,7 @@ TEST(Islands, ManifoldRowsFollowAppendedManifolds) {
         g.contacts.pairs.push_back(p);
         g.contacts.manifolds.emplace_back();
     }
-    builder.assignManifolds(g.contacts, pool, got);
+    builder.assignManifolds(g.contacts, got);
     expectSame(bruteForce(g), got, "appended");
 }
 
