@@ -51,8 +51,10 @@ void forEachArray(Bodies& b, Op&& op) {
                     &b.lcz,
                     &b.friction,
                     &b.restitution,
-                    &b.density})
+                    &b.density,
+                    &b.sleepTimer})
         op(*a);
+    op(b.sleepGroup);
     op(b.shape);
     op(b.filterCategory);
     op(b.filterMask);

@@ -15,8 +15,9 @@ namespace rubble::detail {
 
 enum BodyFlags : std::uint8_t {
     kFlagKinematic = 1u << 0,
-    kFlagFrozen = 1u << 1,  ///< state went non-finite; no longer simulated
-    kFlagAsleep = 1u << 2,  ///< resting in a sleeping island: the broad phase skips pairs of two such bodies
+    kFlagFrozen = 1u << 1,   ///< state went non-finite; no longer simulated
+    kFlagAsleep = 1u << 2,   ///< resting in a sleeping island: the broad phase skips pairs of two such bodies
+    kFlagNoSleep = 1u << 3,  ///< BodyDef::allowSleep was false: its island never sleeps
 };
 
 /// Dynamic and kinematic bodies. Position is the centre of mass; the user-facing origin is
@@ -37,7 +38,9 @@ struct MovingBodies {
     AlignedVector<float> gravityScale;                   ///< 0 for kinematic bodies
     AlignedVector<float> lcx, lcy, lcz;                  ///< centre of mass in the body frame
     AlignedVector<float> friction, restitution, density;
-    std::vector<std::uint32_t> shape;  ///< shape slot index
+    AlignedVector<float> sleepTimer;        ///< how long the body has rested, s (islands_sleep.cpp)
+    std::vector<std::uint32_t> sleepGroup;  ///< while asleep: the sleeping island that holds it (islands_sleep.h)
+    std::vector<std::uint32_t> shape;       ///< shape slot index
     std::vector<std::uint32_t> filterCategory, filterMask;
     std::vector<std::uint64_t> userData;
     std::vector<std::uint8_t> flags;

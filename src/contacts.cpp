@@ -119,4 +119,53 @@ void ContactCache::remember(const Contacts& contacts, const std::vector<PointImp
     });
 }
 
+void ContactCache::restoreIntoStep(std::span<const KeptManifold> kept, const BodyStorage& storage, Contacts& contacts,
+                                   std::vector<PointImpulse>& impulses) {
+    const auto& slots = storage.slots();
+    for (const KeptManifold& k : kept) {
+        ContactPair pair = k.pair;
+        pair.a = slots[pair.a].dense;
+        pair.b = slots[pair.b].dense;
+        contacts.pairs.push_back(pair);
+        contacts.manifolds.push_back(k.manifold);
+        contacts.pointCount += static_cast<std::uint32_t>(k.manifold.pointCount);
+        impulses.insert(impulses.end(), std::begin(k.impulses), std::end(k.impulses));
+        currentKeys_.push_back(k.key);
+    }
+}
+
+void ContactCache::restoreForWarmStart(std::span<const KeptManifold> kept) {
+    for (const KeptManifold& k : kept) {
+        Entry& e = previous_.emplace_back();
+        e.key = k.key;
+        e.pointCount = k.manifold.pointCount;
+        for (int i = 0; i < e.pointCount; ++i) {
+            e.features[i] = k.manifold.points[i].feature;
+            e.positions[i] = k.manifold.points[i].position;
+            e.impulses[i] = k.impulses[i];
+        }
+    }
+    rebuildTable();
+}
+
+void ContactCache::rebuildTable() {
+    std::size_t size = 16;
+    while (size < 2 * previous_.size()) size *= 2;
+    table_.assign(size, 0);
+    const std::size_t mask = size - 1;
+    for (std::size_t m = 0; m < previous_.size(); ++m) {
+        std::size_t at = hashOf(previous_[m].key) & mask;
+        while (table_[at] != 0) at = (at + 1) & mask;
+        table_[at] = static_cast<std::uint32_t>(m + 1);
+    }
+}
+
+void ContactCache::partnersOf(std::uint32_t slot, std::vector<std::uint32_t>& out) const {
+    for (const Entry& e : previous_) {
+        const auto a = static_cast<std::uint32_t>(e.key.slots >> 32), b = static_cast<std::uint32_t>(e.key.slots);
+        if (a == slot) out.push_back(b);
+        if (b == slot) out.push_back(a);
+    }
+}
+
 }  // namespace rubble::detail

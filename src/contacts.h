@@ -6,6 +6,7 @@
 // equal boxes, and a stack that lost its impulses there would drop). Matched points carry their accumulated
 // impulses so that the solver can warm start. Pairs that separate are simply not matched again and are forgotten.
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "body_storage.h"
@@ -35,6 +36,15 @@ struct ContactKey {
 /// How far a contact point may have moved in one step and still be the same point, m.
 inline constexpr float kContactMatchDistance = 0.02f;
 
+/// A manifold kept out of the step while its island sleeps (islands_sleep.h), with the impulses it ended with. Its
+/// bodies are named by slot, not dense index: dense indices move when other bodies are removed.
+struct KeptManifold {
+    ContactKey key;
+    ContactPair pair;  ///< a and b are slots
+    Manifold manifold;
+    PointImpulse impulses[kMaxManifoldPoints];
+};
+
 class ContactCache {
 public:
     /// Impulses for this step's manifolds: kMaxManifoldPoints per manifold, in `contacts` order, carried over from
@@ -44,11 +54,26 @@ public:
     /// Keeps this step's manifolds and their final impulses for the next step (call after the solver).
     void remember(const Contacts& contacts, const std::vector<PointImpulse>& impulses, TaskPool& pool);
 
+    /// Key of manifold m of the contacts last passed to warmStart.
+    const ContactKey& currentKey(std::size_t m) const { return currentKeys_[m]; }
+    /// Appends kept manifolds to this step's contacts (after warmStart, before the solver): they start from their
+    /// kept impulses and are remembered with the rest. For an island woken by a touch, whose own pairs the broad
+    /// phase skipped this step.
+    void restoreIntoStep(std::span<const KeptManifold> kept, const BodyStorage& storage, Contacts& contacts,
+                         std::vector<PointImpulse>& impulses);
+    /// Adds kept manifolds to last step's, so that next step's manifolds of the same pairs warm-start from them.
+    /// For an island woken between steps, whose pairs the next step finds again.
+    void restoreForWarmStart(std::span<const KeptManifold> kept);
+    /// Appends the slots of the bodies that touched `slot` in the last step.
+    void partnersOf(std::uint32_t slot, std::vector<std::uint32_t>& out) const;
+
     std::uint32_t matchedManifolds() const { return matchedManifolds_; }
     std::uint32_t matchedPoints() const { return matchedPoints_; }
     std::uint32_t size() const { return static_cast<std::uint32_t>(previous_.size()); }
 
 private:
+    void rebuildTable();
+
     struct Entry {
         ContactKey key;
         std::uint32_t features[kMaxManifoldPoints] = {};

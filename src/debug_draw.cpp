@@ -85,9 +85,12 @@ void DebugDraw::capsule(const Transform& pose, float radius, float halfHeight, D
 
 namespace {
 
-/// The island a moving body belongs to, for kDrawIslands. Islands are not built yet; the islands stage returns the
-/// body's island index here (and debugDraw then colours by it). Until then no body has one.
-std::optional<std::uint32_t> islandOf(const World::Impl&, std::uint32_t /*movingIndex*/) { return std::nullopt; }
+/// The island a moving body belonged to at the last step, for kDrawIslands; bodies added since have none yet.
+std::optional<std::uint32_t> islandOf(const World::Impl& w, std::uint32_t movingIndex) {
+    const std::vector<std::uint32_t>& of = w.islands.islandOf;
+    if (movingIndex >= of.size() || of[movingIndex] == detail::kNoIsland) return std::nullopt;
+    return of[movingIndex];
+}
 
 DebugColor islandColor(std::uint32_t island) {
     // A fixed hash spread over hues, so an island keeps its colour from frame to frame.

@@ -344,20 +344,33 @@ template <class F, bool Offsets, bool ExpMap>
 }
 
 /// Runs kernel over [begin, end): full batches wide, the tail one body at a time. Flagged indices are appended
-/// in ascending order.
+/// in ascending order. With `asleep` (the bodies' flags), sleeping bodies are skipped: a batch of sleepers costs one
+/// look at its flags, a batch with some runs its awake lanes one at a time.
 template <class WideKernel, class ScalarKernel>
-void runRange(std::size_t begin, std::size_t end, bool wide, WideKernel&& wideKernel, ScalarKernel&& scalarKernel,
-              std::vector<std::uint32_t>& flagged) {
+void runRange(std::size_t begin, std::size_t end, bool wide, const std::uint8_t* asleep, WideKernel&& wideKernel,
+              ScalarKernel&& scalarKernel, std::vector<std::uint32_t>& flagged) {
+    const auto scalar = [&](std::size_t i) {
+        if (asleep != nullptr && (asleep[i] & kFlagAsleep)) return;
+        if (scalarKernel(i)) flagged.push_back(static_cast<std::uint32_t>(i));
+    };
     std::size_t i = begin;
     if (wide) {
         const std::size_t wideEnd = begin + simd::roundDownToLanes<FloatW>(end - begin);
         for (; i < wideEnd; i += simd::kLanes) {
+            if (asleep != nullptr) {
+                std::size_t sleepers = 0;
+                for (std::size_t k = 0; k < simd::kLanes; ++k) sleepers += (asleep[i + k] & kFlagAsleep) != 0;
+                if (sleepers == simd::kLanes) continue;
+                if (sleepers != 0) {
+                    for (std::size_t k = 0; k < simd::kLanes; ++k) scalar(i + k);
+                    continue;
+                }
+            }
             const auto bad = wideKernel(i);
             simd::forEachSetLane(bad, [&](std::size_t k) { flagged.push_back(static_cast<std::uint32_t>(i + k)); });
         }
     }
-    for (; i < end; ++i)
-        if (scalarKernel(i)) flagged.push_back(static_cast<std::uint32_t>(i));
+    for (; i < end; ++i) scalar(i);
 }
 
 /// Splits [0, count) into chunks on the pool (inline when it is one chunk) and merges the flagged indices of
@@ -382,7 +395,8 @@ void velocities(MovingBodies& b, const IntegrationParams& params, IntegrationScr
         b.size(), pool,
         [&](std::size_t begin, std::size_t end, std::vector<std::uint32_t>& flagged) {
             runRange(
-                begin, end, wide, [&](std::size_t i) { return velocityKernel<FloatW, I>(b, params, s, i); },
+                begin, end, wide, params.skipAsleep ? b.flags.data() : nullptr,
+                [&](std::size_t i) { return velocityKernel<FloatW, I>(b, params, s, i); },
                 [&](std::size_t i) { return velocityKernel<float, I>(b, params, s, i); }, flagged);
         },
         nonFinite);
@@ -395,7 +409,7 @@ void positions(MovingBodies& b, const IntegrationParams& params, const Integrati
         b.size(), pool,
         [&](std::size_t begin, std::size_t end, std::vector<std::uint32_t>& flagged) {
             runRange(
-                begin, end, wide,
+                begin, end, wide, params.skipAsleep ? b.flags.data() : nullptr,
                 [&](std::size_t i) { return positionKernel<FloatW, Offsets, ExpMap>(b, params, s, i); },
                 [&](std::size_t i) { return positionKernel<float, Offsets, ExpMap>(b, params, s, i); }, flagged);
         },

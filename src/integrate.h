@@ -24,6 +24,8 @@ struct IntegrationParams {
     /// Clear the accumulators after use. With substeps, forces act over every substep and are cleared after the
     /// last one.
     bool clearForces = true;
+    /// Leave bodies flagged asleep alone (Effect::Sleeping). When false the flags are not read.
+    bool skipAsleep = false;
 };
 
 /// Per-body state carried from integrateVelocities to integratePositions for the non-default integrators.

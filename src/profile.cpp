@@ -11,6 +11,7 @@ std::string_view stageName(Stage s) {
         "broad_phase",           //
         "narrow_phase",          //
         "contact_cache",         //
+        "islands",               //
         "solver",                //
         "integrate_positions",   //
     };

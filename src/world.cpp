@@ -220,7 +220,8 @@ BodyId World::createBody(const BodyDef& def) {
     m.filterCategory[i] = def.filter.category;
     m.filterMask[i] = def.filter.mask;
     m.userData[i] = def.userData;
-    m.flags[i] = kinematic ? detail::kFlagKinematic : 0;
+    m.flags[i] = static_cast<std::uint8_t>((kinematic ? detail::kFlagKinematic : 0) |
+                                           (def.allowSleep ? 0 : detail::kFlagNoSleep));
     w.setMassFromShape(i);
     const Vec3 com = def.position + rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]});
     m.px[i] = com.x, m.py[i] = com.y, m.pz[i] = com.z;
@@ -235,6 +236,9 @@ void World::destroyBody(BodyId id) {
     const std::uint32_t shape =
         slot.set == BodySet::Moving ? w.bodies.moving.shape[slot.dense] : w.bodies.statics.shape[slot.dense];
     w.shapeUsers[shape] -= 1;
+    // What rested on the body falls: its own sleeping island and the islands it touched wake.
+    if (slot.set == BodySet::Moving) w.wake(slot.dense);
+    w.sleeping.wakeTouching(id.index, w.bodies, w.contactCache);
     if (slot.set == BodySet::Static) w.broadPhase.staticRemoved(id.index);
     w.joints.removeAttachedTo(id);
     w.bodies.release(id);
@@ -348,6 +352,16 @@ bool World::isFrozen(BodyId id) const {
     return i >= 0 && (impl_->bodies.moving.flags[i] & detail::kFlagFrozen);
 }
 
+bool World::isAwake(BodyId id) const {
+    const long i = impl_->movingIndex(id, "World::isAwake");
+    return i >= 0 && !(impl_->bodies.moving.flags[i] & detail::kFlagAsleep);
+}
+
+void World::wakeUp(BodyId id) {
+    const long i = impl_->movingIndex(id, "World::wakeUp");
+    if (i >= 0) impl_->wake(static_cast<std::uint32_t>(i));
+}
+
 void World::setTransform(BodyId id, Vec3 position, Quat orientation) {
     static constexpr const char* kWhere = "World::setTransform";
     Impl& w = *impl_;
@@ -356,6 +370,7 @@ void World::setTransform(BodyId id, Vec3 position, Quat orientation) {
     const Quat q = requireUnit(kWhere, "orientation", orientation);
     w.queries.bodiesChanged();
     const std::uint32_t i = s.dense;
+    w.sleeping.wakeTouching(id.index, w.bodies, w.contactCache);
     if (s.set == BodySet::Static) {
         auto& b = w.bodies.statics;
         b.px[i] = position.x, b.py[i] = position.y, b.pz[i] = position.z;
@@ -364,6 +379,7 @@ void World::setTransform(BodyId id, Vec3 position, Quat orientation) {
         w.broadPhase.staticAdded(id.index);
         return;
     }
+    w.wake(i);
     MovingBodies& m = w.bodies.moving;
     m.qx[i] = q.x, m.qy[i] = q.y, m.qz[i] = q.z, m.qw[i] = q.w;
     const Vec3 com = position + rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]});
@@ -381,6 +397,7 @@ void World::setLinearVelocity(BodyId id, Vec3 v) {
     }
     MovingBodies& m = impl_->bodies.moving;
     if (m.flags[i] & detail::kFlagFrozen) return;
+    impl_->wake(static_cast<std::uint32_t>(i));
     m.vx[i] = v.x, m.vy[i] = v.y, m.vz[i] = v.z;
 }
 
@@ -394,6 +411,7 @@ void World::setAngularVelocity(BodyId id, Vec3 v) {
     }
     MovingBodies& m = impl_->bodies.moving;
     if (m.flags[i] & detail::kFlagFrozen) return;
+    impl_->wake(static_cast<std::uint32_t>(i));
     m.wx[i] = v.x, m.wy[i] = v.y, m.wz[i] = v.z;
     if (v != Vec3{} && !impl_->effects.has(Effect::Rotation)) impl_->effectsDirty = true;
 }
@@ -409,6 +427,7 @@ void World::setMaterial(BodyId id, const Material& material) {
         b.friction[i] = material.friction, b.restitution[i] = material.restitution, b.density[i] = material.density;
     } else {
         auto& b = w.bodies.moving;
+        w.wake(i);
         b.friction[i] = material.friction, b.restitution[i] = material.restitution, b.density[i] = material.density;
         if (w.isDynamic(i)) w.setMassFromShape(i);
     }
@@ -422,7 +441,9 @@ void World::setFilter(BodyId id, CollisionFilter f) {
         w.bodies.statics.filterCategory[s.dense] = f.category;
         w.bodies.statics.filterMask[s.dense] = f.mask;
         w.broadPhase.staticFiltersChanged();
+        w.sleeping.wakeTouching(id.index, w.bodies, w.contactCache);
     } else {
+        w.wake(s.dense);
         w.bodies.moving.filterCategory[s.dense] = f.category;
         w.bodies.moving.filterMask[s.dense] = f.mask;
     }
@@ -442,6 +463,7 @@ void World::addForce(BodyId id, Vec3 force) {
     const long i = impl_->movingIndex(id, kWhere);
     requireFinite(kWhere, "force", force);
     if (i < 0 || !impl_->isDynamic(static_cast<std::uint32_t>(i))) return;
+    impl_->wake(static_cast<std::uint32_t>(i));
     MovingBodies& m = impl_->bodies.moving;
     m.fx[i] += force.x, m.fy[i] += force.y, m.fz[i] += force.z;
     impl_->forcesPending = true;
@@ -452,6 +474,7 @@ void World::addTorque(BodyId id, Vec3 torque) {
     const long i = impl_->movingIndex(id, kWhere);
     requireFinite(kWhere, "torque", torque);
     if (i < 0 || !impl_->isDynamic(static_cast<std::uint32_t>(i))) return;
+    impl_->wake(static_cast<std::uint32_t>(i));
     MovingBodies& m = impl_->bodies.moving;
     m.tx[i] += torque.x, m.ty[i] += torque.y, m.tz[i] += torque.z;
     impl_->forcesPending = true;
@@ -473,6 +496,7 @@ void World::applyLinearImpulse(BodyId id, Vec3 impulse) {
     const long i = impl_->movingIndex(id, kWhere);
     requireFinite(kWhere, "impulse", impulse);
     if (i < 0 || !impl_->isDynamic(static_cast<std::uint32_t>(i))) return;
+    impl_->wake(static_cast<std::uint32_t>(i));
     MovingBodies& m = impl_->bodies.moving;
     m.vx[i] += impulse.x * m.invMass[i], m.vy[i] += impulse.y * m.invMass[i], m.vz[i] += impulse.z * m.invMass[i];
 }
@@ -482,6 +506,7 @@ void World::applyAngularImpulse(BodyId id, Vec3 impulse) {
     const long i = impl_->movingIndex(id, kWhere);
     requireFinite(kWhere, "impulse", impulse);
     if (i < 0 || !impl_->isDynamic(static_cast<std::uint32_t>(i))) return;
+    impl_->wake(static_cast<std::uint32_t>(i));
     const Vec3 dw = impl_->applyWorldInverseInertia(static_cast<std::uint32_t>(i), impulse);
     MovingBodies& m = impl_->bodies.moving;
     m.wx[i] += dw.x, m.wy[i] += dw.y, m.wz[i] += dw.z;
@@ -501,6 +526,29 @@ void World::applyImpulseAtPoint(BodyId id, Vec3 impulse, Vec3 worldPoint) {
 // ---------------------------------------------------------------------------------------------------------------
 // The step
 
+namespace {
+
+/// The islands stage before the solver: union-find over this step's manifolds, the joints and the links that hold
+/// each sleeping island together; with sleeping,
+/// islands that a sleeping body shares with an awake one (or with a moving kinematic body) wake whole.
+void runIslands(World::Impl& w, bool sleeping) {
+    Profile& profile = w.profile;
+    {
+        detail::StageTimer timer(profile, Stage::Islands, w.origin);
+        w.islandEdges.clear();
+        w.joints.appendEdges(w.bodies, w.islandEdges);
+        w.sleeping.linkSleepingIslands(w.bodies, w.islandEdges);
+        w.islandBuilder.build(w.contacts, w.islandEdges, w.bodies.moving, *w.pool, w.islands);
+        if (sleeping && w.sleeping.wakeTouched(w.islands, w.bodies, w.integrationScratch, w.contacts, w.impulses,
+                                               w.contactCache, *w.pool))
+            w.islandBuilder.assignManifolds(w.contacts, w.islands);
+    }
+    profile.islands = w.islands.count();
+    profile.largestIsland = w.islands.largest;
+}
+
+}  // namespace
+
 void World::step(float dt) {
     if (!std::isfinite(dt) || dt <= 0)
         fail("World::step", "dt must be finite and > 0 (got " + std::to_string(dt) + ")");
@@ -513,6 +561,8 @@ void World::step(float dt) {
 
     w.resolveEffectsIfDirty();
     profile.effects = w.effects;
+    const bool sleeping = w.effects.has(Effect::Sleeping);
+    if (!sleeping && w.sleeping.sleepingBodies() > 0) w.sleeping.wakeAll(w.bodies);
 
     const int substeps = w.settings.substeps;
     detail::IntegrationParams params;
@@ -520,6 +570,7 @@ void World::step(float dt) {
     params.gravity = w.effects.has(Effect::Gravity) ? w.settings.gravity : Vec3{};
     params.rotation = w.effects.has(Effect::Rotation);
     params.integrator = w.settings.integrator;
+    params.skipAsleep = w.sleeping.sleepingBodies() > 0;
     // Nothing changes velocities when there is no gravity, force, damping or rotation: the stage is not run.
     const bool velocitiesChange = w.effects.has(Effect::Gravity) || params.rotation || w.forcesPending ||
                                   w.anyDamping || params.integrator != Integrator::SemiImplicitEuler;
@@ -569,10 +620,12 @@ void World::step(float dt) {
             profile.contactPoints = w.contacts.pointCount;
             {
                 detail::StageTimer timer(profile, Stage::ContactCache, w.origin);
+                w.sleeping.flushWarmStarts(w.contactCache);
                 w.contactCache.warmStart(w.contacts, w.bodies, *w.pool, w.impulses);
             }
             profile.matchedManifolds = w.contactCache.matchedManifolds();
             profile.warmStartedPoints = w.contactCache.matchedPoints();
+            runIslands(w, sleeping);
             {
                 detail::StageTimer timer(profile, Stage::Solver, w.origin);
                 if (joints) {
@@ -586,6 +639,11 @@ void World::step(float dt) {
             profile.constraints = stats.constraints;
             profile.colors = stats.colors;
             profile.laneOccupancy = stats.laneOccupancy;
+        } else if (sub == 0 && sleeping) {
+            // No pairs can exist, but a lone body still rests and falls asleep.
+            w.contacts.clear();
+            w.impulses.clear();
+            runIslands(w, sleeping);
         }
         const bool solve = collided && (!w.contactSolver.empty() || joints);
         if (solve) {
@@ -647,6 +705,12 @@ void World::step(float dt) {
         w.contactSolver.storeImpulses(w.impulses);
         w.contactCache.remember(w.contacts, w.impulses, *w.pool);
     }
+    if (sleeping) {
+        detail::StageTimer timer(profile, Stage::Islands, w.origin);
+        w.sleeping.fallAsleep(w.islands, w.contacts, w.impulses, w.contactCache, w.bodies, w.shapeBounds,
+                              w.settings.sleep, dt, *w.pool);
+    }
+    profile.sleepingBodies = w.sleeping.sleepingBodies();
     w.forcesPending = false;
     if (joints) {
         profile.brokenJoints = static_cast<std::uint32_t>(w.joints.brokenReports().size() - brokenBefore);
@@ -681,6 +745,9 @@ void World::setSettings(const WorldSettings& s) {
              "settings.positionIterations must be in [0, 1000] (got " + std::to_string(s.positionIterations) + ")");
     if (s.threads < 0 || s.threads > 1024)
         fail(kWhere, "settings.threads must be in [0, 1024] (got " + std::to_string(s.threads) + ")");
+    requireNonNegative(kWhere, "settings.sleep.linearThreshold", s.sleep.linearThreshold);
+    requireNonNegative(kWhere, "settings.sleep.angularThreshold", s.sleep.angularThreshold);
+    requireNonNegative(kWhere, "settings.sleep.timeToSleep", s.sleep.timeToSleep);
     if ((s.effects.bits & ~EffectSet::all().bits) != 0)
         fail(kWhere, "settings.effects has unknown bits (" + std::to_string(s.effects.bits) + ")");
     Impl& w = *impl_;

@@ -11,6 +11,8 @@
 #include "contacts.h"
 #include "effects.h"
 #include "integrate.h"
+#include "islands.h"
+#include "islands_sleep.h"
 #include "joint_storage.h"
 #include "narrowphase/narrowphase_stage.h"
 #include "parallel.h"
@@ -69,6 +71,12 @@ struct World::Impl {
     detail::Contacts contacts;
     detail::ContactCache contactCache;
     std::vector<detail::PointImpulse> impulses;
+    detail::IslandBuilder islandBuilder;
+    detail::Islands islands;
+    detail::SleepingIslands sleeping;
+    /// Extra edges of the island graph (dense index pairs): the links that hold each sleeping island together, and
+    /// where joints will add theirs.
+    std::vector<detail::IslandEdge> islandEdges;
     detail::ContactSolver contactSolver;
     detail::JointStore joints;
     detail::JointSolver jointSolver;
@@ -160,6 +168,9 @@ struct World::Impl {
         }
         refreshWorldInertia(i);
     }
+
+    /// Wakes the sleeping island of a moving body about to be pushed, moved or changed through the API.
+    void wake(std::uint32_t i) { sleeping.wake(i, bodies); }
 
     /// A body whose state went non-finite stops being simulated (its last finite state is kept) and is reported.
     void freeze(std::uint32_t i) {

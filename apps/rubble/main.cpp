@@ -282,6 +282,8 @@ int run(const Options& options) {
         std::printf("\n");
         std::printf("cache      %u of %u manifolds continue last step's, %u of %u points warm-started\n",
                     last.matchedManifolds, last.manifolds, last.warmStartedPoints, last.contactPoints);
+        std::printf("islands    %u islands, the largest of %u bodies; %u bodies asleep\n", last.islands,
+                    last.largestIsland, last.sleepingBodies);
         std::printf("solver     %u constraints in %u colours, SIMD lanes %.0f%% filled; %s, %d+%d iterations\n",
                     last.constraints, last.colors, 100.0 * last.laneOccupancy,
                     std::string(rubble::positionCorrectionName(scene.settings.solver.positionCorrection)).c_str(),

@@ -35,6 +35,9 @@ struct BodyDef {
     float linearDamping = 0.0f;   ///< 1/s, >= 0
     float angularDamping = 0.0f;  ///< 1/s, >= 0
     float gravityScale = 1.0f;
+    /// May fall asleep with its island when the scene declares Effect::Sleeping. A body that may not keeps its
+    /// whole island awake.
+    bool allowSleep = true;
     std::uint64_t userData = 0;
 };
 

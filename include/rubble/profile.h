@@ -14,6 +14,7 @@ enum class Stage : std::uint8_t {
     BroadPhase,
     NarrowPhase,
     ContactCache,
+    Islands,
     Solver,
     IntegratePositions,
     Count,
@@ -55,6 +56,9 @@ struct Profile {
     std::uint32_t brokenJoints = 0;       ///< joints that broke in this step
     /// Wall time of the joint solver's work inside the solver stage (rows, warm start, iterations), ms.
     double jointMs = 0;
+    std::uint32_t islands = 0;         ///< islands of dynamic bodies (a body alone is an island), asleep included
+    std::uint32_t largestIsland = 0;   ///< bodies in the largest island
+    std::uint32_t sleepingBodies = 0;  ///< bodies asleep after the step
 
     const StageTiming& operator[](Stage s) const { return stages[static_cast<int>(s)]; }
     StageTiming& operator[](Stage s) { return stages[static_cast<int>(s)]; }

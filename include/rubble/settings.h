@@ -85,6 +85,19 @@ struct SolverSettings {
     bool shockPropagation = false;
 };
 
+/// When bodies fall asleep (only in scenes that declare Effect::Sleeping). A body rests while its speed is below
+/// `linearThreshold`, its angular speed below `angularThreshold`, and its angular speed times its reach (the largest
+/// distance of its shape from the centre of mass) below `linearThreshold` as well, so that a long body turning slowly
+/// at its ends does not count as resting. An island whose bodies have all rested for `timeToSleep` falls asleep: its
+/// bodies stop being integrated and its contacts stop being solved until something wakes it. The defaults are Box2D
+/// v3's (0.05 m/s, 0.5 s); the angular threshold only matters for tiny bodies, whose reach makes the size-aware term
+/// weak.
+struct SleepSettings {
+    float linearThreshold = 0.05f;  ///< m/s, >= 0
+    float angularThreshold = 0.5f;  ///< rad/s, >= 0
+    float timeToSleep = 0.5f;       ///< s, >= 0
+};
+
 enum class BroadPhaseKind : std::uint8_t { Auto, SweepAndPrune, Grid };
 
 std::string_view broadPhaseName(BroadPhaseKind b);
@@ -108,6 +121,7 @@ struct WorldSettings {
     /// Effects the scene declares. The engine removes those the content cannot show (see World::activeEffects).
     EffectSet effects = EffectSet::defaults();
     BroadPhaseKind broadPhase = BroadPhaseKind::Auto;
+    SleepSettings sleep;
 };
 
 }  // namespace rubble

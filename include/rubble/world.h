@@ -68,6 +68,11 @@ public:
     std::uint64_t userData(BodyId id) const;
     /// True when the body's state went non-finite and the world stopped simulating it.
     bool isFrozen(BodyId id) const;
+    /// False while the body sleeps with its island (Effect::Sleeping) and for static bodies; true otherwise.
+    bool isAwake(BodyId id) const;
+    /// Wakes the body's sleeping island (nothing for an awake or static body). Forces, impulses, velocities and
+    /// transforms set through this API wake the island too, as does removing or moving a body it rests on.
+    void wakeUp(BodyId id);
 
     void setTransform(BodyId id, Vec3 position, Quat orientation);
     void setLinearVelocity(BodyId id, Vec3 v);

@@ -438,8 +438,8 @@ void checkKeys(const Json& obj, const Loc& at, std::initializer_list<std::string
 
 /// Keys every generator accepts besides its own.
 constexpr std::string_view kGeneratorBodyKeys[] = {
-    "type",     "shape",  "shapes",         "body_type",       "rotation",      "velocity", "angular_velocity",
-    "material", "filter", "linear_damping", "angular_damping", "gravity_scale", "user_data"};
+    "type",     "shape",  "shapes",         "body_type",       "rotation",      "velocity",  "angular_velocity",
+    "material", "filter", "linear_damping", "angular_damping", "gravity_scale", "user_data", "allow_sleep"};
 
 void require(const Json& obj, const Loc& at, std::string_view key) {
     if (!obj.contains(key)) at.fail("missing required key '" + std::string(key) + "'");
@@ -534,7 +534,7 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
     expectObject(j, at);
     checkKeys(j, at,
               {"dt", "gravity", "substeps", "velocity_iterations", "position_iterations", "threads", "integrator",
-               "effects", "broadphase", "position_correction", "warm_starting", "shock_propagation"});
+               "effects", "broadphase", "position_correction", "warm_starting", "shock_propagation", "sleep"});
     WorldSettings& s = scene.settings;
     if (j.contains("dt")) s.timeStep = getFloat(j["dt"], at / "dt", Sign::Positive);
     if (j.contains("gravity")) s.gravity = getVec3(j["gravity"], at / "gravity");
@@ -572,6 +572,17 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
     if (j.contains("warm_starting")) s.solver.warmStarting = getBool(j["warm_starting"], at / "warm_starting");
     if (j.contains("shock_propagation"))
         s.solver.shockPropagation = getBool(j["shock_propagation"], at / "shock_propagation");
+    if (j.contains("sleep")) {
+        const Loc sl = at / "sleep";
+        const Json& o = expectObject(j["sleep"], sl, "a sleep settings object");
+        checkKeys(o, sl, {"linear_threshold", "angular_threshold", "time_to_sleep"});
+        if (o.contains("linear_threshold"))
+            s.sleep.linearThreshold = getFloat(o["linear_threshold"], sl / "linear_threshold", Sign::NonNegative);
+        if (o.contains("angular_threshold"))
+            s.sleep.angularThreshold = getFloat(o["angular_threshold"], sl / "angular_threshold", Sign::NonNegative);
+        if (o.contains("time_to_sleep"))
+            s.sleep.timeToSleep = getFloat(o["time_to_sleep"], sl / "time_to_sleep", Sign::NonNegative);
+    }
     if (j.contains("broadphase")) {
         const std::string& name = getString(j["broadphase"], at / "broadphase");
         const auto v = broadPhaseFromName(name);
@@ -897,6 +908,7 @@ void Builder::parseBodyFields(const Json& j, const Loc& at, std::string_view typ
         def.angularDamping = getFloat(j["angular_damping"], at / "angular_damping", Sign::NonNegative);
     if (j.contains("gravity_scale")) def.gravityScale = getFloat(j["gravity_scale"], at / "gravity_scale");
     if (j.contains("user_data")) def.userData = getUint64(j["user_data"], at / "user_data");
+    if (j.contains("allow_sleep")) def.allowSleep = getBool(j["allow_sleep"], at / "allow_sleep");
 }
 
 void Builder::reserveBodies(double count, const Loc& at) const {
@@ -915,7 +927,7 @@ void Builder::parseBodies(const Json& j, const Loc& at) {
         const Json& o = expectObject(arr[i], b, "a body object");
         checkKeys(o, b,
                   {"shape", "type", "position", "rotation", "velocity", "angular_velocity", "material", "filter",
-                   "linear_damping", "angular_damping", "gravity_scale", "user_data"});
+                   "linear_damping", "angular_damping", "gravity_scale", "user_data", "allow_sleep"});
         require(o, b, "shape");
         SceneBody body;
         body.shape = shapeRef(o["shape"], b / "shape");

@@ -77,7 +77,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     colorOf_.resize(manifoldCount);
     std::uint32_t colorCounts[kMaxColors + 1] = {};
     const auto isDynamic = [&](std::uint32_t dense) {
-        return (m.flags[dense] & (kFlagKinematic | kFlagFrozen)) == 0 && m.invMass[dense] > 0;
+        return (m.flags[dense] & (kFlagKinematic | kFlagFrozen | kFlagAsleep)) == 0 && m.invMass[dense] > 0;
     };
     const auto touch = [&](std::uint32_t dense) {
         if (solverIndex_[dense] < 0) {
@@ -308,7 +308,7 @@ void ContactSolver::storeVelocities(MovingBodies& m, TaskPool& pool) const {
     pool.forChunks(b.count, kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t i = begin; i < end; ++i) {
             const std::uint32_t d = b.moving[i];
-            if ((m.flags[d] & (kFlagKinematic | kFlagFrozen)) != 0) continue;
+            if ((m.flags[d] & (kFlagKinematic | kFlagFrozen | kFlagAsleep)) != 0) continue;
             m.vx[d] = b.vx[i], m.vy[d] = b.vy[i], m.vz[d] = b.vz[i];
             m.wx[d] = b.wx[i], m.wy[d] = b.wy[i], m.wz[d] = b.wz[i];
         }
@@ -514,7 +514,7 @@ void ContactSolver::applyPseudoVelocities(MovingBodies& m, TaskPool& pool) {
     pool.forChunks(b.count, kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t i = begin; i < end; ++i) {
             const std::uint32_t d = b.moving[i];
-            if ((m.flags[d] & (kFlagKinematic | kFlagFrozen)) == 0) {
+            if ((m.flags[d] & (kFlagKinematic | kFlagFrozen | kFlagAsleep)) == 0) {
                 m.px[d] += b.pvx[i] * h, m.py[d] += b.pvy[i] * h, m.pz[d] += b.pvz[i] * h;
                 const Vec3 w{b.pwx[i] * h, b.pwy[i] * h, b.pwz[i] * h};
                 if (w != Vec3{}) {

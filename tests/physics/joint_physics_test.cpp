@@ -19,6 +19,8 @@ World makeWorld(Vec3 gravity = {0, -kG, 0}, int substeps = 1) {
     s.threads = 1;
     s.gravity = gravity;
     s.substeps = substeps;
+    // Awake throughout: a weight hanging still would fall asleep, and a sleeping joint reports no force.
+    s.effects = s.effects.without(Effect::Sleeping);
     return World(s);
 }
 

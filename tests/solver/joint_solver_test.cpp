@@ -328,5 +328,37 @@ std::uint64_t jointSceneHash(int threads) {
 
 TEST(JointSolver, StateIsIdenticalForOneAndTwoThreads) { EXPECT_EQ(jointSceneHash(1), jointSceneHash(2)); }
 
+// A joint joins its bodies' islands even when they do not touch: they count as one island, fall asleep together and
+// wake together (the joint's edge reaches the island builder).
+TEST(JointSolver, JointedBodiesShareAnIslandAndSleepTogether) {
+    World world;
+    BodyDef ground;
+    ground.type = BodyType::Static;
+    ground.shape = world.createShape(BoxDef{{20, 0.5f, 20}});
+    ground.position = {0, -0.5f, 0};
+    world.createBody(ground);
+    BodyDef ball;
+    ball.shape = world.createShape(SphereDef{0.5f});
+    ball.position = {-1.5f, 0.5f, 0};
+    const BodyId left = world.createBody(ball);
+    ball.position = {1.5f, 0.5f, 0};
+    const BodyId right = world.createBody(ball);
+    ball.position = {6, 0.5f, 0};
+    world.createBody(ball);
+    DistanceJointDef rod;
+    rod.bodyA = left;
+    rod.bodyB = right;
+    world.createJoint(rod);
+    world.step(1.0f / 60);
+    EXPECT_EQ(world.lastProfile().islands, 2u);
+    EXPECT_EQ(world.lastProfile().largestIsland, 2u);
+    for (int i = 0; i < 120; ++i) world.step(1.0f / 60);
+    ASSERT_FALSE(world.isAwake(left));
+    ASSERT_FALSE(world.isAwake(right));
+    world.wakeUp(right);
+    world.step(1.0f / 60);
+    EXPECT_TRUE(world.isAwake(left));
+}
+
 }  // namespace
 }  // namespace rubble
