@@ -20,6 +20,8 @@ constexpr std::size_t kBatchChunk = 8;
 constexpr std::uint32_t kMaxColors = 63;
 constexpr std::uint32_t kOverflowColor = kMaxColors;
 constexpr std::uint32_t kNoColor = ~0u;
+/// Shock propagation: passes over each level's contacts.
+constexpr int kShockPasses = 4;
 
 /// Friction directions from the normal: the helper axis follows the normal's largest component, so the basis
 /// is continuous for every normal near a coordinate axis (ground, walls, stacked boxes) and the carried friction
@@ -433,47 +435,55 @@ void ContactSolver::propagateShock() {
     params.useBias = settings_.positionCorrection == PositionCorrection::Baumgarte;
     params.moved = moved_;
     const BodyRows rows = rowsFor(0);
-    for (const ShockContact& s : shockOrder_) {
-        ContactBatch& b = batches_[s.lane / kBatchLanes];
-        const std::size_t lane = s.lane % kBatchLanes;
-        // Hold the lower side still for this contact (no mass, no inertia; its velocity is still read), and give
-        // the points the effective masses of the upper body alone.
-        const bool holdA = s.heldSide == 0;
-        float* held[7] = {holdA ? b.invMassA : b.invMassB, holdA ? b.iaXX : b.ibXX, holdA ? b.iaYY : b.ibYY,
-                          holdA ? b.iaZZ : b.ibZZ,         holdA ? b.iaXY : b.ibXY, holdA ? b.iaXZ : b.ibXZ,
-                          holdA ? b.iaYZ : b.ibYZ};
-        float heldValues[7];
-        for (int i = 0; i < 7; ++i) heldValues[i] = held[i][lane], held[i][lane] = 0;
-        const float upperMass = holdA ? b.invMassB[lane] : b.invMassA[lane];
-        const simd::SymMat3W<float> upperInertia =
-            holdA ? contact_kernels::inertiaB<float>(b, lane) : contact_kernels::inertiaA<float>(b, lane);
-        const Vec3 n{b.nx[lane], b.ny[lane], b.nz[lane]}, t1{b.t1x[lane], b.t1y[lane], b.t1z[lane]},
-            t2{b.t2x[lane], b.t2y[lane], b.t2z[lane]};
-        float pointMasses[kMaxManifoldPoints][3];
-        for (int i = 0; i < kMaxManifoldPoints; ++i) {
-            ContactBatch::Point& p = b.points[i];
-            pointMasses[i][0] = p.normalMass[lane], pointMasses[i][1] = p.tangentMass1[lane];
-            pointMasses[i][2] = p.tangentMass2[lane];
-            if (p.normalMass[lane] == 0) continue;  // no point here
-            const Vec3 r =
-                holdA ? Vec3{p.rBx[lane], p.rBy[lane], p.rBz[lane]} : Vec3{p.rAx[lane], p.rAy[lane], p.rAz[lane]};
-            const auto effective = [&](Vec3 dir) {
-                const simd::Vec3W<float> rd = toWide(cross(r, dir));
-                return 1.0f / (upperMass + simd::dot(rd, upperInertia * rd));
-            };
-            p.normalMass[lane] = effective(n);
-            if (p.tangentMass1[lane] != 0) p.tangentMass1[lane] = effective(t1), p.tangentMass2[lane] = effective(t2);
-        }
-        if (friction_)
-            contact_kernels::solve<float, true>(b, lane, rows, params);
-        else
-            contact_kernels::solve<float, false>(b, lane, rows, params);
-        for (int i = 0; i < 7; ++i) held[i][lane] = heldValues[i];
-        for (int i = 0; i < kMaxManifoldPoints; ++i) {
-            ContactBatch::Point& p = b.points[i];
-            p.normalMass[lane] = pointMasses[i][0], p.tangentMass1[lane] = pointMasses[i][1];
-            p.tangentMass2[lane] = pointMasses[i][2];
-        }
+    // A body resting on several others is solved against each in turn; passes over its level (with every level
+    // below already held) let those contacts agree before the level above holds it in turn.
+    for (std::size_t first = 0, last = 0; first < shockOrder_.size(); first = last) {
+        while (last < shockOrder_.size() && shockOrder_[last].level == shockOrder_[first].level) ++last;
+        for (int pass = 0; pass < kShockPasses; ++pass)
+            for (std::size_t at = first; at < last; ++at) solveHeld(shockOrder_[at], rows, params);
+    }
+}
+
+void ContactSolver::solveHeld(const ShockContact& s, const BodyRows& rows, const SolveParams& params) {
+    ContactBatch& b = batches_[s.lane / kBatchLanes];
+    const std::size_t lane = s.lane % kBatchLanes;
+    // Hold the lower side still for this contact (no mass, no inertia; its velocity is still read), and give
+    // the points the effective masses of the upper body alone.
+    const bool holdA = s.heldSide == 0;
+    float* held[7] = {holdA ? b.invMassA : b.invMassB, holdA ? b.iaXX : b.ibXX, holdA ? b.iaYY : b.ibYY,
+                      holdA ? b.iaZZ : b.ibZZ,         holdA ? b.iaXY : b.ibXY, holdA ? b.iaXZ : b.ibXZ,
+                      holdA ? b.iaYZ : b.ibYZ};
+    float heldValues[7];
+    for (int i = 0; i < 7; ++i) heldValues[i] = held[i][lane], held[i][lane] = 0;
+    const float upperMass = holdA ? b.invMassB[lane] : b.invMassA[lane];
+    const simd::SymMat3W<float> upperInertia =
+        holdA ? contact_kernels::inertiaB<float>(b, lane) : contact_kernels::inertiaA<float>(b, lane);
+    const Vec3 n{b.nx[lane], b.ny[lane], b.nz[lane]}, t1{b.t1x[lane], b.t1y[lane], b.t1z[lane]},
+        t2{b.t2x[lane], b.t2y[lane], b.t2z[lane]};
+    float pointMasses[kMaxManifoldPoints][3];
+    for (int i = 0; i < kMaxManifoldPoints; ++i) {
+        ContactBatch::Point& p = b.points[i];
+        pointMasses[i][0] = p.normalMass[lane], pointMasses[i][1] = p.tangentMass1[lane];
+        pointMasses[i][2] = p.tangentMass2[lane];
+        if (p.normalMass[lane] == 0) continue;  // no point here
+        const Vec3 r =
+            holdA ? Vec3{p.rBx[lane], p.rBy[lane], p.rBz[lane]} : Vec3{p.rAx[lane], p.rAy[lane], p.rAz[lane]};
+        const auto effective = [&](Vec3 dir) {
+            const simd::Vec3W<float> rd = toWide(cross(r, dir));
+            return 1.0f / (upperMass + simd::dot(rd, upperInertia * rd));
+        };
+        p.normalMass[lane] = effective(n);
+        if (p.tangentMass1[lane] != 0) p.tangentMass1[lane] = effective(t1), p.tangentMass2[lane] = effective(t2);
+    }
+    if (friction_)
+        contact_kernels::solve<float, true>(b, lane, rows, params);
+    else
+        contact_kernels::solve<float, false>(b, lane, rows, params);
+    for (int i = 0; i < 7; ++i) held[i][lane] = heldValues[i];
+    for (int i = 0; i < kMaxManifoldPoints; ++i) {
+        ContactBatch::Point& p = b.points[i];
+        p.normalMass[lane] = pointMasses[i][0], p.tangentMass1[lane] = pointMasses[i][1];
+        p.tangentMass2[lane] = pointMasses[i][2];
     }
 }
 

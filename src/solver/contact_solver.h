@@ -117,6 +117,7 @@ private:
         std::uint32_t lane = 0;   ///< batch * kBatchLanes + lane
         std::uint32_t heldSide = 0;
     };
+    void solveHeld(const ShockContact& s, const BodyRows& rows, const SolveParams& params);
 
     SolverSettings settings_;
     float h_ = 0;
