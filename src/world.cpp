@@ -702,7 +702,7 @@ void World::step(float dt) {
     }
     if (collided) {
         detail::StageTimer timer(profile, Stage::ContactCache, w.origin);
-        w.contactSolver.storeImpulses(w.impulses);
+        w.contactSolver.storeImpulses(w.impulses, *w.pool);
         w.contactCache.remember(w.contacts, w.impulses, *w.pool);
     }
     if (sleeping) {

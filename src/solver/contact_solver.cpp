@@ -553,20 +553,29 @@ void ContactSolver::applyRestitution(TaskPool& pool) {
     });
 }
 
-void ContactSolver::storeImpulses(std::vector<PointImpulse>& impulses) const {
-    std::fill(impulses.begin(), impulses.end(), PointImpulse{});
-    for (std::size_t bi = 0; bi < batches_.size(); ++bi) {
-        const ContactBatch& b = batches_[bi];
-        for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
-            const std::uint32_t k = manifoldOfLane_[bi * kBatchLanes + lane];
-            if (k == ~0u) continue;
-            for (int i = 0; i < kMaxManifoldPoints; ++i) {
-                const ContactBatch::Point& p = b.points[i];
-                impulses[k * kMaxManifoldPoints + i] = {p.normalImpulse[lane], p.tangentImpulse1[lane],
-                                                        p.tangentImpulse2[lane]};
-            }
-        }
-    }
+void ContactSolver::storeImpulses(std::vector<PointImpulse>& impulses, TaskPool& pool) const {
+    // Manifolds without a dynamic body have no lane and keep zero; every other manifold is in exactly one lane, so
+    // the batches write disjoint entries and run on any thread.
+    pool.forChunks(impulses.size(), kManifoldChunk * kMaxManifoldPoints,
+                   [&](std::size_t, std::size_t begin, std::size_t end, int) {
+                       std::fill(impulses.begin() + static_cast<std::ptrdiff_t>(begin),
+                                 impulses.begin() + static_cast<std::ptrdiff_t>(end), PointImpulse{});
+                   });
+    pool.forChunks(batches_.size(), kManifoldChunk / kBatchLanes,
+                   [&](std::size_t, std::size_t first, std::size_t last, int) {
+                       for (std::size_t bi = first; bi < last; ++bi) {
+                           const ContactBatch& b = batches_[bi];
+                           for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
+                               const std::uint32_t k = manifoldOfLane_[bi * kBatchLanes + lane];
+                               if (k == ~0u) continue;
+                               for (int i = 0; i < kMaxManifoldPoints; ++i) {
+                                   const ContactBatch::Point& p = b.points[i];
+                                   impulses[k * kMaxManifoldPoints + i] = {
+                                       p.normalImpulse[lane], p.tangentImpulse1[lane], p.tangentImpulse2[lane]};
+                               }
+                           }
+                       }
+                   });
 }
 
 }  // namespace rubble::detail

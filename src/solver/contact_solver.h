@@ -92,8 +92,8 @@ public:
     void applyPseudoVelocities(MovingBodies& bodies, TaskPool& pool);
     /// Bounces: approach speeds above the threshold are reversed by the restitution coefficient.
     void applyRestitution(TaskPool& pool);
-    /// The final accumulated impulses, in manifold order, for the contact cache.
-    void storeImpulses(std::vector<PointImpulse>& impulses) const;
+    /// The final accumulated impulses, in manifold order, for the contact cache (in parallel over the batches).
+    void storeImpulses(std::vector<PointImpulse>& impulses, TaskPool& pool) const;
 
     const ContactSolverStats& stats() const { return stats_; }
     struct ColorRange {
