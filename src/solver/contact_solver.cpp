@@ -424,6 +424,30 @@ void ContactSolver::orderForShock() {
     });
     std::stable_sort(shockOrder_.begin(), shockOrder_.end(),
                      [](const ShockContact& x, const ShockContact& y) { return x.level < y.level; });
+    for (ShockContact& s : shockOrder_) computeHeldMasses(s);
+}
+
+void ContactSolver::computeHeldMasses(ShockContact& s) const {
+    const ContactBatch& b = batches_[s.lane / kBatchLanes];
+    const std::size_t lane = s.lane % kBatchLanes;
+    const bool holdA = s.heldSide == 0;
+    const float upperMass = holdA ? b.invMassB[lane] : b.invMassA[lane];
+    const simd::SymMat3W<float> upperInertia =
+        holdA ? contact_kernels::inertiaB<float>(b, lane) : contact_kernels::inertiaA<float>(b, lane);
+    const Vec3 n{b.nx[lane], b.ny[lane], b.nz[lane]}, t1{b.t1x[lane], b.t1y[lane], b.t1z[lane]},
+        t2{b.t2x[lane], b.t2y[lane], b.t2z[lane]};
+    for (int i = 0; i < kMaxManifoldPoints; ++i) {
+        const ContactBatch::Point& p = b.points[i];
+        if (p.normalMass[lane] == 0) continue;  // no point here: its masses stay zero
+        const Vec3 r =
+            holdA ? Vec3{p.rBx[lane], p.rBy[lane], p.rBz[lane]} : Vec3{p.rAx[lane], p.rAy[lane], p.rAz[lane]};
+        const auto effective = [&](Vec3 dir) {
+            const simd::Vec3W<float> rd = toWide(cross(r, dir));
+            return 1.0f / (upperMass + simd::dot(rd, upperInertia * rd));
+        };
+        s.heldMasses[i][0] = effective(n);
+        if (p.tangentMass1[lane] != 0) s.heldMasses[i][1] = effective(t1), s.heldMasses[i][2] = effective(t2);
+    }
 }
 
 void ContactSolver::propagateShock() {
@@ -455,25 +479,13 @@ void ContactSolver::solveHeld(const ShockContact& s, const BodyRows& rows, const
                       holdA ? b.iaYZ : b.ibYZ};
     float heldValues[7];
     for (int i = 0; i < 7; ++i) heldValues[i] = held[i][lane], held[i][lane] = 0;
-    const float upperMass = holdA ? b.invMassB[lane] : b.invMassA[lane];
-    const simd::SymMat3W<float> upperInertia =
-        holdA ? contact_kernels::inertiaB<float>(b, lane) : contact_kernels::inertiaA<float>(b, lane);
-    const Vec3 n{b.nx[lane], b.ny[lane], b.nz[lane]}, t1{b.t1x[lane], b.t1y[lane], b.t1z[lane]},
-        t2{b.t2x[lane], b.t2y[lane], b.t2z[lane]};
     float pointMasses[kMaxManifoldPoints][3];
     for (int i = 0; i < kMaxManifoldPoints; ++i) {
         ContactBatch::Point& p = b.points[i];
         pointMasses[i][0] = p.normalMass[lane], pointMasses[i][1] = p.tangentMass1[lane];
         pointMasses[i][2] = p.tangentMass2[lane];
-        if (p.normalMass[lane] == 0) continue;  // no point here
-        const Vec3 r =
-            holdA ? Vec3{p.rBx[lane], p.rBy[lane], p.rBz[lane]} : Vec3{p.rAx[lane], p.rAy[lane], p.rAz[lane]};
-        const auto effective = [&](Vec3 dir) {
-            const simd::Vec3W<float> rd = toWide(cross(r, dir));
-            return 1.0f / (upperMass + simd::dot(rd, upperInertia * rd));
-        };
-        p.normalMass[lane] = effective(n);
-        if (p.tangentMass1[lane] != 0) p.tangentMass1[lane] = effective(t1), p.tangentMass2[lane] = effective(t2);
+        p.normalMass[lane] = s.heldMasses[i][0], p.tangentMass1[lane] = s.heldMasses[i][1];
+        p.tangentMass2[lane] = s.heldMasses[i][2];
     }
     if (friction_)
         contact_kernels::solve<float, true>(b, lane, rows, params);

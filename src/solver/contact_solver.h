@@ -116,7 +116,10 @@ private:
         std::uint32_t level = 0;  ///< the upper body's distance in contacts from a body that cannot move
         std::uint32_t lane = 0;   ///< batch * kBatchLanes + lane
         std::uint32_t heldSide = 0;
+        /// Normal and tangent effective masses of each point with the lower side held: the upper body's alone.
+        float heldMasses[kMaxManifoldPoints][3] = {};
     };
+    void computeHeldMasses(ShockContact& s) const;
     void solveHeld(const ShockContact& s, const BodyRows& rows, const SolveParams& params);
 
     SolverSettings settings_;
