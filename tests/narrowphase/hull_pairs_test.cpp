@@ -33,6 +33,7 @@
 #include "narrowphase/ccd_oracle.h"
 #include "narrowphase/hull_pairs.h"
 #include "shapes/shape.h"
+#include "support/test_shapes.h"
 
 namespace {
 
@@ -48,23 +49,11 @@ Quat randomRotation(std::mt19937& rng) {
 }
 
 ConvexHull randomHull(std::mt19937& rng, int points, float scale) {
-    std::uniform_real_distribution<float> u(-1, 1), s(0.4f, 1.0f);
-    const Vec3 axes{scale * s(rng), scale * s(rng), scale * s(rng)};
-    std::vector<Vec3> cloud;
-    while (static_cast<int>(cloud.size()) < points) {
-        const Vec3 p{u(rng), u(rng), u(rng)};
-        if (dot(p, p) > 1) continue;
-        cloud.push_back({p.x * axes.x, p.y * axes.y, p.z * axes.z});
-    }
-    const Shape shape = buildShape(ConvexHullDef{cloud});
+    const Shape shape = buildShape(ConvexHullDef{randomHullCloud(rng, points, scale)});
     return *shape.hull;
 }
 
-ConvexHull boxHull(Vec3 h) {
-    std::vector<Vec3> corners;
-    for (int i = 0; i < 8; ++i) corners.push_back({i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z});
-    return *buildShape(ConvexHullDef{corners}).hull;
-}
+ConvexHull boxHull(Vec3 h) { return *buildShape(ConvexHullDef{boxCorners(h)}).hull; }
 
 /// World vertices, face normals and edges of a posed hull, in double.
 struct WorldHull {

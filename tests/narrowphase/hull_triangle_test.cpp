@@ -65,6 +65,7 @@
 #include "shapes/mesh_adjacency.h"
 #include "shapes/shape.h"
 #include "support/stage_scene.h"
+#include "support/test_shapes.h"
 
 namespace {
 
@@ -95,21 +96,7 @@ TestHull makeHull(const std::vector<Vec3>& points) {
 }
 
 TestHull randomHull(std::mt19937& rng, int points, float scale) {
-    std::uniform_real_distribution<float> u(-1, 1), s(0.4f, 1.0f);
-    const Vec3 axes{scale * s(rng), scale * s(rng), scale * s(rng)};
-    std::vector<Vec3> cloud;
-    while (static_cast<int>(cloud.size()) < points) {
-        const Vec3 p{u(rng), u(rng), u(rng)};
-        if (dot(p, p) > 1) continue;
-        cloud.push_back({p.x * axes.x, p.y * axes.y, p.z * axes.z});
-    }
-    return makeHull(cloud);
-}
-
-std::vector<Vec3> boxCorners(Vec3 h) {
-    std::vector<Vec3> corners;
-    for (int i = 0; i < 8; ++i) corners.push_back({i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z});
-    return corners;
+    return makeHull(randomHullCloud(rng, points, scale));
 }
 
 /// A rock: a flat pentagonal bottom face, a narrower pentagon above it turned a little, and a ridge on top.
@@ -804,14 +791,7 @@ TEST(HullTriangle, StageHullsOnFlatMeshAndHeightfieldGetOnlyTheFaceNormal) {
     // positions that put their contacts exactly over internal edges and vertices, in several turns: through the stage
     // (each static shape's own active-edge masks) every manifold must have the face normal and the sink depth.
     Scene scene;
-    TriangleMeshDef grid;
-    for (int r = 0; r <= 8; ++r)
-        for (int c = 0; c <= 8; ++c) grid.vertices.push_back({float(c) - 4, 0, float(r) - 4});
-    for (std::uint32_t r = 0; r < 8; ++r)
-        for (std::uint32_t c = 0; c < 8; ++c) {
-            const std::uint32_t a = r * 9 + c, b = a + 1, d = a + 9, e = d + 1;
-            grid.indices.insert(grid.indices.end(), {a, d, e, a, e, b});
-        }
+    const TriangleMeshDef grid = rubble::test::flatGridMesh(8);
     HeightfieldDef field;
     field.rows = field.columns = 9;
     field.heights.assign(81, 0.0f);

@@ -16,6 +16,7 @@
 #include "narrowphase/narrowphase_stage.h"
 #include "parallel.h"
 #include "support/stage_scene.h"
+#include "support/test_shapes.h"
 
 using namespace rubble;
 using rubble::test::StageScene;
@@ -234,14 +235,7 @@ TEST(NarrowPhaseStage, BodiesOnAFlatMeshTouchItWithTheFaceNormalEvenOverInternal
     // exactly on internal edges and vertices; the mesh's active-edge masks must make every normal the face's.
     StageScene scene;
     BroadPhaseStage broad;
-    TriangleMeshDef grid;
-    for (int r = 0; r <= 8; ++r)
-        for (int c = 0; c <= 8; ++c) grid.vertices.push_back({float(c) - 4, 0, float(r) - 4});
-    for (std::uint32_t r = 0; r < 8; ++r)
-        for (std::uint32_t c = 0; c < 8; ++c) {
-            const std::uint32_t a = r * 9 + c, b = a + 1, d = a + 9, e = d + 1;
-            grid.indices.insert(grid.indices.end(), {a, d, e, a, e, b});
-        }
+    const TriangleMeshDef grid = rubble::test::flatGridMesh(8);
     const std::uint32_t mesh = scene.addShape(grid);
     const std::uint32_t ball = scene.addShape(SphereDef{0.5f}), cube = scene.addShape(BoxDef{{0.5f, 0.5f, 0.5f}}),
                         pill = scene.addShape(CapsuleDef{0.3f, 0.5f});
