@@ -369,7 +369,6 @@ void ContactSolver::orderForShock() {
     constexpr std::uint32_t kUnreached = ~0u;
     adjacencyStart_.assign(bodyCount + 1, 0);
     levelOf_.assign(bodyCount, kUnreached);
-    std::vector<std::uint32_t>& queue = adjacency_;  // reused below; first the level-0 bodies
     const auto forEachLane = [&](auto&& visit) {
         for (std::size_t bi = 0; bi < batches_.size(); ++bi)
             for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
@@ -389,9 +388,11 @@ void ContactSolver::orderForShock() {
         }
     });
     for (std::uint32_t i = 0; i < bodyCount; ++i) adjacencyStart_[i + 1] += adjacencyStart_[i];
-    std::vector<std::uint32_t> neighbours(adjacencyStart_[bodyCount]);
+    std::vector<std::uint32_t>& neighbours = adjacency_;
+    neighbours.resize(adjacencyStart_[bodyCount]);
     {
-        std::vector<std::uint32_t> fill(adjacencyStart_.begin(), adjacencyStart_.end() - 1);
+        std::vector<std::uint32_t>& fill = adjacencyFill_;
+        fill.assign(adjacencyStart_.begin(), adjacencyStart_.end() - 1);
         forEachLane([&](const ContactBatch& b, std::size_t lane, std::size_t) {
             if (!dynamicSide(b, lane, 0) || !dynamicSide(b, lane, 1)) return;
             const auto a = static_cast<std::uint32_t>(b.bodyA[lane]), c = static_cast<std::uint32_t>(b.bodyB[lane]);
@@ -399,6 +400,7 @@ void ContactSolver::orderForShock() {
             neighbours[fill[c]++] = a;
         });
     }
+    std::vector<std::uint32_t>& queue = shockQueue_;
     queue.clear();
     for (std::uint32_t i = 0; i < bodyCount; ++i)
         if (levelOf_[i] == 0) queue.push_back(i);

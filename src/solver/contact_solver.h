@@ -136,7 +136,8 @@ private:
     std::vector<std::uint32_t> manifoldOfLane_;  ///< batch * kLanes + lane -> manifold, ~0u for an empty lane
     std::vector<ShockContact> shockOrder_;       ///< by level, then by lane
     std::vector<std::uint32_t> levelOf_;         ///< shock pass: level per solver index
-    std::vector<std::uint32_t> adjacencyStart_, adjacency_;
+    std::vector<std::uint32_t> adjacencyStart_, adjacency_, adjacencyFill_;  ///< shock pass: contact graph (CSR)
+    std::vector<std::uint32_t> shockQueue_;                                  ///< shock pass: breadth-first order
     // Prepare scratch.
     std::vector<std::int32_t> solverIndex_;  ///< dense index of a moving body -> solver index, -1 if untouched
     std::vector<std::uint64_t> bodyColors_;  ///< per solver index: colours that already hold the body
