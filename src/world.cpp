@@ -633,11 +633,13 @@ void World::step(float dt) {
                     w.jointSolver.couple(w.joints, w.bodies, w.jointCoupling);
                 }
                 w.contactSolver.prepare(w.contacts, w.impulses, w.bodies, w.settings, w.effects, params.dt, *w.pool,
-                                        joints ? &w.jointCoupling : nullptr);
+                                        joints ? &w.jointCoupling : nullptr, &w.islands);
             }
             const detail::ContactSolverStats& stats = w.contactSolver.stats();
             profile.constraints = stats.constraints;
             profile.colors = stats.colors;
+            profile.solverBlocks = stats.blocks;
+            profile.largeIslandConstraints = stats.largeIslandConstraints;
             profile.laneOccupancy = stats.laneOccupancy;
         } else if (sub == 0 && sleeping) {
             // No pairs can exist, but a lone body still rests and falls asleep.
@@ -657,16 +659,20 @@ void World::step(float dt) {
                 if (solver.warmStarting) js.warmStart(cs.bodies());
             }
             if (solver.warmStarting) cs.warmStart(*w.pool);
-            for (int i = 0; i < w.settings.velocityIterations; ++i) {
-                if (joints) {
-                    detail::JointTimer jointTimer(profile);
-                    js.solve(cs.bodies(), true);
+            // The joint pass is serial over all joints, so with joints the contacts go one iteration at a time;
+            // without, each block of islands runs all its iterations in one task.
+            if (joints)
+                for (int i = 0; i < w.settings.velocityIterations; ++i) {
+                    {
+                        detail::JointTimer jointTimer(profile);
+                        js.solve(cs.bodies(), true);
+                    }
+                    cs.solveVelocities(true, *w.pool);
                 }
-                cs.solveVelocities(true, *w.pool);
-            }
+            else
+                cs.solveVelocities(true, *w.pool, w.settings.velocityIterations);
             if (solver.shockPropagation && !softStep) cs.propagateShock();
-            if (splitImpulse)
-                for (int i = 0; i < w.settings.positionIterations; ++i) cs.solvePositions(*w.pool);
+            if (splitImpulse) cs.solvePositions(*w.pool, w.settings.positionIterations);
             cs.storeVelocities(w.bodies.moving, *w.pool);
         }
         {
@@ -683,14 +689,16 @@ void World::step(float dt) {
             const bool bounce = lastSub && w.effects.has(Effect::Restitution);
             if (relax || bounce) {
                 cs.loadBodies(w.bodies.moving, *w.pool);
-                if (relax)
+                if (relax && joints)
                     for (int i = 0; i < w.settings.positionIterations; ++i) {
-                        if (joints) {
+                        {
                             detail::JointTimer jointTimer(profile);
                             w.jointSolver.solve(cs.bodies(), false);
                         }
                         cs.solveVelocities(false, *w.pool);
                     }
+                else if (relax)
+                    cs.solveVelocities(false, *w.pool, w.settings.positionIterations);
                 if (bounce) cs.applyRestitution(*w.pool);
                 cs.storeVelocities(w.bodies.moving, *w.pool);
             }

@@ -284,10 +284,13 @@ int run(const Options& options) {
                     last.matchedManifolds, last.manifolds, last.warmStartedPoints, last.contactPoints);
         std::printf("islands    %u islands, the largest of %u bodies; %u bodies asleep\n", last.islands,
                     last.largestIsland, last.sleepingBodies);
-        std::printf("solver     %u constraints in %u colours, SIMD lanes %.0f%% filled; %s, %d+%d iterations\n",
-                    last.constraints, last.colors, 100.0 * last.laneOccupancy,
-                    std::string(rubble::positionCorrectionName(scene.settings.solver.positionCorrection)).c_str(),
-                    scene.settings.velocityIterations, scene.settings.positionIterations);
+        std::printf(
+            "solver     %u constraints: %u in %u blocks of small islands, %u in large islands; at most %u "
+            "colours, SIMD lanes %.0f%% filled; %s, %d+%d iterations\n",
+            last.constraints, last.constraints - last.largeIslandConstraints, last.solverBlocks,
+            last.largeIslandConstraints, last.colors, 100.0 * last.laneOccupancy,
+            std::string(rubble::positionCorrectionName(scene.settings.solver.positionCorrection)).c_str(),
+            scene.settings.velocityIterations, scene.settings.positionIterations);
     } else {
         std::printf("\nstep       median %.4f ms over %zu steps\n", stepMedian, stepMs.size());
     }

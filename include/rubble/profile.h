@@ -50,10 +50,12 @@ struct Profile {
     std::uint32_t matchedManifolds = 0;   ///< manifolds that continue one of the previous step (same pair and parts)
     std::uint32_t warmStartedPoints = 0;  ///< points whose feature matched: they start from last step's impulses
     std::uint32_t constraints = 0;        ///< contact manifolds the solver works on (a dynamic body on one side)
-    std::uint32_t colors = 0;             ///< graph colours of the contact constraints
-    float laneOccupancy = 0;              ///< filled SIMD lanes over lanes used by the solver, in [0, 1]
-    std::uint32_t joints = 0;             ///< joints that acted in this step (unbroken; zero when joints did not run)
-    std::uint32_t brokenJoints = 0;       ///< joints that broke in this step
+    std::uint32_t colors = 0;             ///< graph colours of the contact constraints (most in any one block)
+    std::uint32_t solverBlocks = 0;       ///< blocks of small islands, each solved whole by one task
+    std::uint32_t largeIslandConstraints = 0;  ///< constraints of islands solved colour by colour across threads
+    float laneOccupancy = 0;                   ///< filled SIMD lanes over lanes used by the solver, in [0, 1]
+    std::uint32_t joints = 0;        ///< joints that acted in this step (unbroken; zero when joints did not run)
+    std::uint32_t brokenJoints = 0;  ///< joints that broke in this step
     /// Wall time of the joint solver's work inside the solver stage (rows, warm start, iterations), ms.
     double jointMs = 0;
     std::uint32_t islands = 0;         ///< islands of dynamic bodies (a body alone is an island), asleep included

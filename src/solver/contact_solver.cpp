@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "islands.h"
 #include "parallel.h"
 
 namespace rubble::detail {
@@ -20,6 +21,13 @@ constexpr std::size_t kBatchChunk = 8;
 constexpr std::uint32_t kMaxColors = 63;
 constexpr std::uint32_t kOverflowColor = kMaxColors;
 constexpr std::uint32_t kNoColor = ~0u;
+/// Islands with more manifolds than this are solved colour by colour across the threads; smaller ones are packed
+/// into blocks that one task solves whole. A block of this size takes a few hundred microseconds per solve on one
+/// core, so one island never holds the other threads up for long.
+constexpr std::size_t kLargeIslandManifolds = 1024;
+/// A block is closed once it holds this many manifolds: enough per colour to fill the SIMD lanes, few enough that
+/// a block's constraint rows (about 400 bytes per manifold) stay in the core's own cache across the iterations.
+constexpr std::size_t kBlockManifolds = 256;
 /// Shock propagation: passes over each level's contacts.
 constexpr int kShockPasses = 4;
 
@@ -60,7 +68,7 @@ Softness soft(float hertz, float dampingRatio, float h) {
 
 void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImpulse>& warm, const BodyStorage& storage,
                             const WorldSettings& settings, EffectSet effects, float h, TaskPool& pool,
-                            const JointCoupling* joints) {
+                            const JointCoupling* joints, const Islands* islands) {
     settings_ = settings.solver;
     h_ = h;
     friction_ = effects.has(Effect::Friction);
@@ -71,13 +79,15 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     const StaticBodies& s = storage.statics;
     const std::size_t manifoldCount = contacts.manifolds.size();
 
-    // Solver indices in order of first appearance and greedy colouring in manifold order: both serial, both
-    // linear, and both depend only on the manifolds' canonical order.
+    partition(contacts, islands);
+
+    // Solver indices in order of first appearance, segment by segment (a block's bodies get neighbouring rows), and
+    // greedy colouring in each segment's manifold order: serial, linear, and dependent only on the manifolds'
+    // canonical order and the islands.
     solverIndex_.assign(m.size(), -1);
     bodies_.moving.clear();
     bodyColors_.clear();
     colorOf_.resize(manifoldCount);
-    std::uint32_t colorCounts[kMaxColors + 1] = {};
     const auto isDynamic = [&](std::uint32_t dense) {
         return (m.flags[dense] & (kFlagKinematic | kFlagFrozen | kFlagAsleep)) == 0 && m.invMass[dense] > 0;
     };
@@ -96,30 +106,67 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         return std::binary_search(joints->noContactPairs.begin(), joints->noContactPairs.end(),
                                   jointedPairKey(slotA, slotB));
     };
-    std::uint32_t constraints = 0;
-    for (std::size_t k = 0; k < manifoldCount; ++k) {
-        const ContactPair& p = contacts.pairs[k];
-        const bool dynA = !p.aStatic && isDynamic(p.a), dynB = !p.bStatic && isDynamic(p.b);
-        if ((!dynA && !dynB) || (jointFilter && jointed(p))) {
-            colorOf_[k] = kNoColor;
-            continue;
+    colors_.clear();
+    blocks_.clear();
+    manifoldOfLane_.clear();
+    stats_ = {};
+    std::uint32_t batchCount = 0;
+    const std::size_t segmentCount = segmentStart_.size() - 1;
+    for (std::size_t segment = 0; segment < segmentCount; ++segment) {
+        const bool largePart = segment + 1 == segmentCount;
+        const std::uint32_t* first = segmentManifolds_.data() + segmentStart_[segment];
+        const std::uint32_t* last = segmentManifolds_.data() + segmentStart_[segment + 1];
+        std::uint32_t colorCounts[kMaxColors + 1] = {};
+        std::uint32_t constraints = 0;
+        for (const std::uint32_t* it = first; it != last; ++it) {
+            const std::uint32_t k = *it;
+            const ContactPair& p = contacts.pairs[k];
+            const bool dynA = !p.aStatic && isDynamic(p.a), dynB = !p.bStatic && isDynamic(p.b);
+            if ((!dynA && !dynB) || (jointFilter && jointed(p))) {
+                colorOf_[k] = kNoColor;
+                continue;
+            }
+            std::uint64_t used = 0;
+            std::uint32_t ia = 0, ib = 0;
+            if (!p.aStatic) ia = touch(p.a);
+            if (!p.bStatic) ib = touch(p.b);
+            if (dynA) used |= bodyColors_[ia];
+            if (dynB) used |= bodyColors_[ib];
+            std::uint32_t color = static_cast<std::uint32_t>(std::countr_one(used));
+            if (color >= kMaxColors) {
+                color = kOverflowColor;
+            } else {
+                if (dynA) bodyColors_[ia] |= std::uint64_t{1} << color;
+                if (dynB) bodyColors_[ib] |= std::uint64_t{1} << color;
+            }
+            colorOf_[k] = color;
+            colorCounts[color] += 1;
+            constraints += 1;
         }
-        std::uint64_t used = 0;
-        std::uint32_t ia = 0, ib = 0;
-        if (!p.aStatic) ia = touch(p.a);
-        if (!p.bStatic) ib = touch(p.b);
-        if (dynA) used |= bodyColors_[ia];
-        if (dynB) used |= bodyColors_[ib];
-        std::uint32_t color = static_cast<std::uint32_t>(std::countr_one(used));
-        if (color >= kMaxColors) {
-            color = kOverflowColor;
-        } else {
-            if (dynA) bodyColors_[ia] |= std::uint64_t{1} << color;
-            if (dynB) bodyColors_[ib] |= std::uint64_t{1} << color;
+        // Every colour starts a fresh batch; the overflow colour comes last.
+        const ColorSpan span{static_cast<std::uint32_t>(colors_.size()), 0};
+        std::uint32_t colorFirstBatch[kMaxColors + 1] = {};
+        for (std::uint32_t c = 0; c <= kMaxColors; ++c) {
+            if (colorCounts[c] == 0) continue;
+            const std::uint32_t n = static_cast<std::uint32_t>((colorCounts[c] + kBatchLanes - 1) / kBatchLanes);
+            colorFirstBatch[c] = batchCount;
+            colors_.push_back({batchCount, n, c == kOverflowColor});
+            batchCount += n;
         }
-        colorOf_[k] = color;
-        colorCounts[color] += 1;
-        constraints += 1;
+        const ColorSpan filledSpan{span.firstColor, static_cast<std::uint32_t>(colors_.size()) - span.firstColor};
+        if (largePart)
+            large_ = filledSpan;
+        else if (filledSpan.colorCount > 0)
+            blocks_.push_back(filledSpan);
+        stats_.constraints += constraints;
+        stats_.colors = std::max(stats_.colors, filledSpan.colorCount);
+        if (largePart) stats_.largeIslandConstraints = constraints;
+        manifoldOfLane_.resize(std::size_t{batchCount} * kBatchLanes, ~0u);
+        std::uint32_t filled[kMaxColors + 1] = {};
+        for (const std::uint32_t* it = first; it != last; ++it) {
+            const std::uint32_t c = colorOf_[*it];
+            if (c != kNoColor) manifoldOfLane_[std::size_t{colorFirstBatch[c]} * kBatchLanes + filled[c]++] = *it;
+        }
     }
     // Jointed bodies after the contacts' own, in the joints' order.
     if (joints)
@@ -127,37 +174,10 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     const std::uint32_t bodyCount = static_cast<std::uint32_t>(bodies_.moving.size());
     bodies_.count = bodyCount;
     const std::int32_t stillRow = static_cast<std::int32_t>(bodyCount);
-
-    // Every colour starts a fresh batch; the overflow colour comes last.
-    colors_.clear();
-    std::uint32_t colorFirstBatch[kMaxColors + 1] = {};
-    std::uint32_t batchCount = 0;
-    for (std::uint32_t c = 0; c <= kMaxColors; ++c) {
-        if (colorCounts[c] == 0) continue;
-        const std::uint32_t n = static_cast<std::uint32_t>((colorCounts[c] + kBatchLanes - 1) / kBatchLanes);
-        colorFirstBatch[c] = batchCount;
-        colors_.push_back({batchCount, n});
-        batchCount += n;
-    }
-    stats_ = {};
-    stats_.constraints = constraints;
-    stats_.colors = static_cast<std::uint32_t>(colors_.size());
     stats_.batches = batchCount;
+    stats_.blocks = static_cast<std::uint32_t>(blocks_.size());
     stats_.laneOccupancy =
-        batchCount ? static_cast<float>(constraints) / static_cast<float>(batchCount * kBatchLanes) : 0;
-    overflow_ = colorCounts[kOverflowColor] > 0;
-
-    manifoldOfLane_.assign(std::size_t{batchCount} * kBatchLanes, ~0u);
-    {
-        std::uint32_t filled[kMaxColors + 1] = {};
-        for (std::size_t k = 0; k < manifoldCount; ++k) {
-            const std::uint32_t c = colorOf_[k];
-            if (c == kNoColor) continue;
-            manifoldOfLane_[std::size_t{colorFirstBatch[c]} * kBatchLanes + filled[c]++] =
-                static_cast<std::uint32_t>(k);
-        }
-    }
-
+        batchCount ? static_cast<float>(stats_.constraints) / static_cast<float>(batchCount * kBatchLanes) : 0;
     // Body rows: the touched bodies, the still row, one scratch row per worker.
     const std::size_t rows = bodyCount + 1 + static_cast<std::size_t>(scratchRows_);
     for (auto* a : {&bodies_.vx, &bodies_.vy, &bodies_.vz, &bodies_.wx, &bodies_.wy, &bodies_.wz, &bodies_.dpx,
@@ -341,24 +361,74 @@ BodyRows ContactSolver::rowsFor(int worker) {
 }
 
 template <class Kernel>
-void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel) {
-    const std::size_t colorCount = colors_.size() - (overflow_ ? 1 : 0);
-    for (std::size_t c = 0; c < colorCount; ++c) {
-        const ColorRange range = colors_[c];
-        pool.forChunks(range.batchCount, kBatchChunk, [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
-            const BodyRows rows = rowsFor(worker);
-            for (std::size_t i = begin; i < end; ++i)
-                kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows);
-        });
-    }
-    if (overflow_) {
-        // One thread, one lane at a time: these manifolds share bodies.
-        const ColorRange range = colors_.back();
-        const BodyRows rows = rowsFor(0);
+void ContactSolver::solveRange(const ColorRange& range, const BodyRows& rows, Kernel& kernel) {
+    if (range.overflow) {
+        // One lane at a time: these manifolds share bodies.
         for (std::size_t i = 0; i < range.batchCount; ++i)
             for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
                 kernel.template operator()<float>(batches_[range.firstBatch + i], lane, rows);
+        return;
     }
+    for (std::size_t i = 0; i < range.batchCount; ++i)
+        kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows);
+}
+
+template <class Kernel>
+void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel, int iterations) {
+    // Blocks share no body with each other or with the large islands: each runs all its iterations in one task.
+    if (!blocks_.empty())
+        pool.forChunks(blocks_.size(), 1, [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
+            const BodyRows rows = rowsFor(worker);
+            for (std::size_t bl = begin; bl < end; ++bl)
+                for (int it = 0; it < iterations; ++it)
+                    for (std::uint32_t c = 0; c < blocks_[bl].colorCount; ++c)
+                        solveRange(colors_[blocks_[bl].firstColor + c], rows, kernel);
+        });
+    for (int it = 0; it < iterations; ++it)
+        for (std::uint32_t c = 0; c < large_.colorCount; ++c) {
+            const ColorRange range = colors_[large_.firstColor + c];
+            if (range.overflow) {
+                const BodyRows rows = rowsFor(0);
+                solveRange(range, rows, kernel);
+                continue;
+            }
+            pool.forChunks(range.batchCount, kBatchChunk,
+                           [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
+                               const BodyRows rows = rowsFor(worker);
+                               for (std::size_t i = begin; i < end; ++i)
+                                   kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows);
+                           });
+        }
+}
+
+void ContactSolver::partition(const Contacts& contacts, const Islands* islands) {
+    const std::size_t manifoldCount = contacts.manifolds.size();
+    segmentManifolds_.clear();
+    segmentStart_.assign(1, 0);
+    const bool useIslands = islands && islands->count() > 0 && islands->manifolds.size() <= manifoldCount;
+    if (!useIslands) {
+        segmentManifolds_.resize(manifoldCount);
+        for (std::size_t k = 0; k < manifoldCount; ++k) segmentManifolds_[k] = static_cast<std::uint32_t>(k);
+        segmentStart_.push_back(static_cast<std::uint32_t>(manifoldCount));
+        return;
+    }
+    placed_.assign(manifoldCount, 0);
+    const auto blockSize = [&] { return segmentManifolds_.size() - segmentStart_.back(); };
+    for (std::uint32_t k = 0; k < islands->count(); ++k) {
+        const std::uint32_t first = islands->manifoldStart[k], last = islands->manifoldStart[k + 1];
+        if (last == first || last - first > kLargeIslandManifolds) continue;
+        for (std::uint32_t i = first; i < last; ++i) {
+            segmentManifolds_.push_back(islands->manifolds[i]);
+            placed_[islands->manifolds[i]] = 1;
+        }
+        if (blockSize() >= kBlockManifolds)
+            segmentStart_.push_back(static_cast<std::uint32_t>(segmentManifolds_.size()));
+    }
+    if (blockSize() > 0) segmentStart_.push_back(static_cast<std::uint32_t>(segmentManifolds_.size()));
+    // The large part: every manifold not in a block (large islands, and any in no island), in manifold order.
+    for (std::size_t k = 0; k < manifoldCount; ++k)
+        if (!placed_[k]) segmentManifolds_.push_back(static_cast<std::uint32_t>(k));
+    segmentStart_.push_back(static_cast<std::uint32_t>(segmentManifolds_.size()));
 }
 
 void ContactSolver::orderForShock() {
@@ -507,29 +577,38 @@ void ContactSolver::warmStart(TaskPool& pool) {
     });
 }
 
-void ContactSolver::solveVelocities(bool useBias, TaskPool& pool) {
+void ContactSolver::solveVelocities(bool useBias, TaskPool& pool, int iterations) {
     SolveParams params;
     params.invH = 1.0f / h_;
     params.maxPushOutVelocity = settings_.maxPushOutVelocity;
     params.useBias = useBias && settings_.positionCorrection != PositionCorrection::SplitImpulse;
     params.moved = moved_;
     if (friction_)
-        forEachColor(pool, [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
-            contact_kernels::solve<F, true>(b, lane, rows, params);
-        });
+        forEachColor(
+            pool,
+            [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
+                contact_kernels::solve<F, true>(b, lane, rows, params);
+            },
+            iterations);
     else
-        forEachColor(pool, [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
-            contact_kernels::solve<F, false>(b, lane, rows, params);
-        });
+        forEachColor(
+            pool,
+            [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
+                contact_kernels::solve<F, false>(b, lane, rows, params);
+            },
+            iterations);
 }
 
-void ContactSolver::solvePositions(TaskPool& pool) {
+void ContactSolver::solvePositions(TaskPool& pool, int iterations) {
     SolveParams params;
     params.invH = 1.0f / h_;
     params.maxPushOutVelocity = settings_.maxPushOutVelocity;
-    forEachColor(pool, [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
-        contact_kernels::solvePositions<F>(b, lane, rows, params);
-    });
+    forEachColor(
+        pool,
+        [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
+            contact_kernels::solvePositions<F>(b, lane, rows, params);
+        },
+        iterations);
 }
 
 void ContactSolver::applyPseudoVelocities(MovingBodies& m, TaskPool& pool) {

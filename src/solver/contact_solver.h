@@ -7,6 +7,13 @@
 // colour; each colour is cut into batches of simd::kLanes manifolds solved together in SIMD lanes, and the batches
 // of one colour are independent, so they run on any thread in any order with the same result. Colours run in a
 // fixed order, so the state after the solve does not depend on the thread count.
+//
+// Island-parallel: given the step's islands, small islands are packed, in island order, into blocks of a few
+// hundred manifolds that share no body with any other block. Each block is coloured on its own and solved whole by
+// one task, every iteration of it while its rows are still in the core's cache; only islands too large for one
+// task (S1's pyramid) are coloured together and solved colour by colour across the threads. The packing depends
+// only on the islands, never on the thread count.
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -20,6 +27,7 @@
 namespace rubble::detail {
 
 class TaskPool;
+struct Islands;
 
 /// The solver's view of the bodies in contact: velocities and the motion since prepare(), by solver index.
 /// Rows [0, count) are the moving bodies the constraints touch, row `count` is the still body that stands for
@@ -49,8 +57,10 @@ inline std::uint64_t jointedPairKey(std::uint32_t slotA, std::uint32_t slotB) {
 
 struct ContactSolverStats {
     std::uint32_t constraints = 0;  ///< manifolds with at least one dynamic body
-    std::uint32_t colors = 0;
+    std::uint32_t colors = 0;       ///< the most colours any block or the large islands needed
     std::uint32_t batches = 0;
+    std::uint32_t blocks = 0;                  ///< blocks of small islands, each solved whole by one task
+    std::uint32_t largeIslandConstraints = 0;  ///< constraints solved colour by colour across the threads
     /// Lanes filled over lanes used, in [0, 1]: how well colouring packs the SIMD batches.
     float laneOccupancy = 0;
 };
@@ -60,9 +70,11 @@ public:
     /// Builds the constraints for this step's manifolds, starting from `warm` (kMaxManifoldPoints per manifold, as
     /// ContactCache::warmStart gives them). `h` is the substep the solve runs at.
     /// With `joints`, the joints' bodies get rows too and the manifolds of their no-contact pairs are left out.
+    /// With `islands` (built over the same contacts), small islands are solved in blocks (see above); without, every
+    /// manifold is coloured together.
     void prepare(const Contacts& contacts, const std::vector<PointImpulse>& warm, const BodyStorage& storage,
                  const WorldSettings& settings, EffectSet effects, float h, TaskPool& pool,
-                 const JointCoupling* joints = nullptr);
+                 const JointCoupling* joints = nullptr, const Islands* islands = nullptr);
     bool empty() const { return stats_.constraints == 0; }
 
     /// The body rows, shared with the joint solver (valid from loadBodies() to storeVelocities()).
@@ -80,14 +92,15 @@ public:
 
     /// Applies the accumulated impulses (every substep; soft step and split impulses carry them through).
     void warmStart(TaskPool& pool);
-    /// One velocity iteration. With bias, overlap is corrected by the chosen position correction; without, only
-    /// speculative gaps are respected (the relax iterations of the soft step, and split impulses' velocity pass).
-    void solveVelocities(bool useBias, TaskPool& pool);
+    /// `iterations` velocity iterations (a block runs all of them in one task). With bias, overlap is corrected by
+    /// the chosen position correction; without, only speculative gaps are respected (the relax iterations of the
+    /// soft step, and split impulses' velocity pass).
+    void solveVelocities(bool useBias, TaskPool& pool, int iterations = 1);
     /// Shock propagation (SolverSettings::shockPropagation): one pass over the contacts from the ground up, each
     /// contact's lower body held still. Serial, in a fixed order.
     void propagateShock();
-    /// Split impulses: one iteration on the pseudo-velocities.
-    void solvePositions(TaskPool& pool);
+    /// Split impulses: `iterations` iterations on the pseudo-velocities.
+    void solvePositions(TaskPool& pool, int iterations = 1);
     /// Split impulses: moves the bodies by their pseudo-velocities over the substep and clears them.
     void applyPseudoVelocities(MovingBodies& bodies, TaskPool& pool);
     /// Bounces: approach speeds above the threshold are reversed by the restitution coefficient.
@@ -99,15 +112,32 @@ public:
     struct ColorRange {
         std::uint32_t firstBatch = 0;
         std::uint32_t batchCount = 0;
+        /// Manifolds that found no free colour, solved one lane at a time; an overflow range is its block's last.
+        bool overflow = false;
     };
-    /// Prepared batches and the colour ranges (the overflow range last, when there is one), for tests.
+    /// Colour ranges [firstColor, firstColor + colorCount) solved in order by one task, or by all threads.
+    struct ColorSpan {
+        std::uint32_t firstColor = 0;
+        std::uint32_t colorCount = 0;
+    };
+    /// Prepared batches and the colour ranges, for tests: the blocks' colours, then the large islands' colours.
     const std::vector<ContactBatch>& batches() const { return batches_; }
     const std::vector<ColorRange>& colorRanges() const { return colors_; }
-    bool hasOverflow() const { return overflow_; }
+    const std::vector<ColorSpan>& blocks() const { return blocks_; }
+    ColorSpan largeIslands() const { return large_; }
+    bool hasOverflow() const {
+        return std::any_of(colors_.begin(), colors_.end(), [](const ColorRange& r) { return r.overflow; });
+    }
+    /// Manifold in a batch lane (batch * kBatchLanes + lane), or ~0u for an empty lane.
+    std::uint32_t manifoldOfLane(std::size_t lane) const { return manifoldOfLane_[lane]; }
 
 private:
     template <class Kernel>
-    void forEachColor(TaskPool& pool, Kernel&& kernel);
+    void forEachColor(TaskPool& pool, Kernel&& kernel, int iterations = 1);
+    template <class Kernel>
+    void solveRange(const ColorRange& range, const BodyRows& rows, Kernel& kernel);
+    /// Lists the manifolds by block (blocks_ spans, then large_), into segmentManifolds_ / segmentStart_.
+    void partition(const Contacts& contacts, const Islands* islands);
     BodyRows rowsFor(int worker);
     void orderForShock();
 
@@ -127,20 +157,24 @@ private:
     bool friction_ = true;
     bool rotation_ = true;
     int scratchRows_ = 1;
-    bool overflow_ = false;  ///< the last colour range holds manifolds that found no free colour
-    bool moved_ = false;     ///< some body moved since prepare(): separations must follow the motion rows
+    bool moved_ = false;  ///< some body moved since prepare(): separations must follow the motion rows
     ContactSolverStats stats_;
     SolverBodies bodies_;
     std::vector<ContactBatch> batches_;
     std::vector<ColorRange> colors_;
+    std::vector<ColorSpan> blocks_;
+    ColorSpan large_;
     std::vector<std::uint32_t> manifoldOfLane_;  ///< batch * kLanes + lane -> manifold, ~0u for an empty lane
     std::vector<ShockContact> shockOrder_;       ///< by level, then by lane
     std::vector<std::uint32_t> levelOf_;         ///< shock pass: level per solver index
     std::vector<std::uint32_t> adjacencyStart_, adjacency_, adjacencyFill_;  ///< shock pass: contact graph (CSR)
     std::vector<std::uint32_t> shockQueue_;                                  ///< shock pass: breadth-first order
     // Prepare scratch.
-    std::vector<std::int32_t> solverIndex_;  ///< dense index of a moving body -> solver index, -1 if untouched
-    std::vector<std::uint64_t> bodyColors_;  ///< per solver index: colours that already hold the body
+    std::vector<std::uint32_t> segmentManifolds_;  ///< manifold indices by segment: each block, then the large part
+    std::vector<std::uint32_t> segmentStart_;      ///< segment k is segmentManifolds_[segmentStart_[k], ...[k + 1])
+    std::vector<std::uint8_t> placed_;             ///< per manifold: listed in a block
+    std::vector<std::int32_t> solverIndex_;        ///< dense index of a moving body -> solver index, -1 if untouched
+    std::vector<std::uint64_t> bodyColors_;        ///< per solver index: colours that already hold the body
     std::vector<std::uint32_t> colorOf_;
     std::vector<std::uint8_t> movedInChunk_;  ///< loadBodies: whether a chunk of bodies moved since prepare()
     AlignedVector<float> p0x_, p0y_, p0z_, q0x_, q0y_, q0z_, q0w_;  ///< pose at prepare(), by solver index

@@ -13,6 +13,7 @@
 #include "solver/contact_batch.h"
 #include "solver/contact_solver.h"
 #include "support/contact_batches.h"
+#include "world_access.h"
 
 namespace rubble {
 namespace {
@@ -147,6 +148,84 @@ TEST(ContactSolver, ColoursNeverHoldADynamicBodyTwice) {
             EXPECT_TRUE(solver.hasOverflow()) << "40 bodies with ~70 neighbours each need > 63 colours";
         }
     }
+}
+
+// Islands share no body, and greedy colouring in manifold order gives each manifold the same colour whether its
+// island is coloured alone or with every other: so blocks of small islands, each running all its iterations in one
+// task, must end bit for bit where one colouring of everything, iteration by iteration, ends.
+TEST(ContactSolver, IslandBlocksEndWhereOneColouringEnds) {
+    WorldSettings s;
+    s.threads = 2;
+    s.effects = s.effects.without(Effect::Sleeping);
+    World world(s);
+    buildPyramid(world, 12);  // one island too large for a block (over a thousand manifolds)
+    BodyDef box;
+    box.shape = world.createShape(BoxDef{{0.4f, 0.4f, 0.4f}});
+    for (int stack = 0; stack < 120; ++stack)  // small islands: stacks of three boxes beside the pyramid
+        for (int level = 0; level < 3; ++level) {
+            box.position = {20.0f + 2.0f * static_cast<float>(stack % 12), 0.4f + 0.8f * static_cast<float>(level),
+                            -10.0f + 2.0f * static_cast<float>(stack / 12)};
+            world.createBody(box);
+        }
+    world.applyLinearImpulse(world.bodies().back(), {30, 0, 10});
+    for (int i = 0; i < 5; ++i) world.step(1.0f / 60.0f);
+
+    World::Impl& w = detail::WorldAccess::of(world);
+    const float h = 1.0f / 60.0f;
+    detail::ContactSolver blocked, together;
+    blocked.prepare(w.contacts, w.impulses, w.bodies, w.settings, w.effects, h, *w.pool, nullptr, &w.islands);
+    together.prepare(w.contacts, w.impulses, w.bodies, w.settings, w.effects, h, *w.pool);
+    ASSERT_GE(blocked.blocks().size(), 2u);
+    ASSERT_GT(blocked.largeIslands().colorCount, 0u);
+    EXPECT_EQ(together.blocks().size(), 0u);
+    EXPECT_EQ(blocked.stats().constraints, together.stats().constraints);
+
+    // No dynamic body appears in two blocks, or in a block and the large islands.
+    std::vector<int> ownerOfRow(blocked.bodies().count, -1);
+    const auto claim = [&](detail::ContactSolver::ColorSpan span, int owner) {
+        for (std::uint32_t c = span.firstColor; c < span.firstColor + span.colorCount; ++c) {
+            const auto range = blocked.colorRanges()[c];
+            for (std::uint32_t bi = range.firstBatch; bi < range.firstBatch + range.batchCount; ++bi) {
+                const ContactBatch& b = blocked.batches()[bi];
+                for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
+                    for (const auto& [row, invMass] :
+                         {std::pair{b.bodyA[lane], b.invMassA[lane]}, std::pair{b.bodyB[lane], b.invMassB[lane]}}) {
+                        if (invMass == 0) continue;
+                        int& owner_ = ownerOfRow[static_cast<std::size_t>(row)];
+                        EXPECT_TRUE(owner_ == -1 || owner_ == owner) << "row " << row << " in two blocks";
+                        owner_ = owner;
+                    }
+            }
+        }
+    };
+    for (std::size_t k = 0; k < blocked.blocks().size(); ++k) claim(blocked.blocks()[k], static_cast<int>(k));
+    claim(blocked.largeIslands(), -2);
+
+    blocked.loadBodies(w.bodies.moving, *w.pool);
+    together.loadBodies(w.bodies.moving, *w.pool);
+    blocked.warmStart(*w.pool);
+    together.warmStart(*w.pool);
+    blocked.solveVelocities(true, *w.pool, 8);
+    for (int i = 0; i < 8; ++i) together.solveVelocities(true, *w.pool);
+    std::vector<detail::PointImpulse> blockedImpulses(w.impulses.size()), togetherImpulses(w.impulses.size());
+    blocked.storeImpulses(blockedImpulses, *w.pool);
+    together.storeImpulses(togetherImpulses, *w.pool);
+    ASSERT_EQ(std::memcmp(blockedImpulses.data(), togetherImpulses.data(),
+                          blockedImpulses.size() * sizeof(detail::PointImpulse)),
+              0);
+    std::size_t compared = 0;
+    for (std::uint32_t dense = 0; dense < w.bodies.moving.size(); ++dense) {
+        const std::int32_t a = blocked.solverIndexOf(dense), b = together.solverIndexOf(dense);
+        ASSERT_EQ(a < 0, b < 0);
+        if (a < 0) continue;
+        const detail::SolverBodies &x = blocked.bodies(), &y = together.bodies();
+        const std::size_t i = static_cast<std::size_t>(a), j = static_cast<std::size_t>(b);
+        const float vx[6] = {x.vx[i], x.vy[i], x.vz[i], x.wx[i], x.wy[i], x.wz[i]};
+        const float vy[6] = {y.vx[j], y.vy[j], y.vz[j], y.wx[j], y.wy[j], y.wz[j]};
+        EXPECT_EQ(std::memcmp(vx, vy, sizeof vx), 0) << "body " << dense;
+        ++compared;
+    }
+    EXPECT_GT(compared, 600u);
 }
 
 struct Rows {
