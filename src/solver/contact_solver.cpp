@@ -31,23 +31,6 @@ constexpr std::size_t kBlockManifolds = 256;
 /// Shock propagation: passes over each level's contacts.
 constexpr int kShockPasses = 4;
 
-/// Friction directions from the normal: the helper axis follows the normal's largest component, so the basis
-/// is continuous for every normal near a coordinate axis (ground, walls, stacked boxes) and the carried friction
-/// impulses keep their meaning from step to step.
-void tangentBasis(Vec3 n, Vec3& t1, Vec3& t2) {
-    const float ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
-    Vec3 helper;
-    if (ay >= ax && ay >= az)
-        helper = {1, 0, 0};
-    else if (ax >= az)
-        helper = {0, 0, 1};
-    else
-        helper = {0, 1, 0};
-    t1 = cross(helper, n);
-    t1 = t1 * (1.0f / length(t1));
-    t2 = cross(n, t1);
-}
-
 struct Softness {
     float biasRate = 0, massScale = 1, impulseScale = 0;
 };
@@ -62,6 +45,67 @@ Softness soft(float hertz, float dampingRatio, float h) {
     const float a2 = h * omega * a1;
     const float a3 = 1.0f / (1.0f + a2);
     return {omega / a1, a2 * a3, a3};
+}
+
+/// What building a batch's lanes gathers besides the batch itself: which lanes and points are used, and the bodies'
+/// velocities (for the approach speeds restitution needs).
+struct BatchInputs {
+    using Lanes = ContactBatch::Lanes;
+    alignas(64) Lanes used = {};
+    alignas(64) Lanes point[kMaxManifoldPoints] = {};
+    alignas(64) Lanes vAx = {}, vAy = {}, vAz = {}, wAx = {}, wAy = {}, wAz = {};
+    alignas(64) Lanes vBx = {}, vBy = {}, vBz = {}, wBx = {}, wBy = {}, wBz = {};
+};
+
+/// The lane-parallel part of building a batch, in SIMD over its manifolds: friction directions, effective masses
+/// and approach speeds.
+void finishBatch(ContactBatch& b, const BatchInputs& in, bool friction) {
+    using F = simd::FloatW;
+    using contact_kernels::at;
+    using contact_kernels::at3;
+    using contact_kernels::put;
+    const auto used = at<F>(in.used, 0) > F(0.0f);
+    const F zero(0.0f), one(1.0f);
+    // Empty lanes have no normal: give them one so that nothing divides by zero, and zero what it yields.
+    const simd::Vec3W<F> n = simd::select<F>(used, at3<F>(b.nx, b.ny, b.nz, 0), {zero, one, zero});
+    // Friction directions from the normal: the helper axis follows the normal's largest component, so the basis is
+    // continuous for every normal near a coordinate axis (ground, walls, stacked boxes) and the carried friction
+    // impulses keep their meaning from step to step.
+    const F ax = simd::abs(n.x), ay = simd::abs(n.y), az = simd::abs(n.z);
+    const auto yLargest = simd::andMask(ay >= ax, ay >= az), xLargest = ax >= az;
+    const simd::Vec3W<F> helper{simd::select(yLargest, one, zero),
+                                simd::select(yLargest, zero, simd::select(xLargest, zero, one)),
+                                simd::select(yLargest, zero, simd::select(xLargest, one, zero))};
+    simd::Vec3W<F> t1 = simd::cross(helper, n);
+    t1 = t1 * (F(1.0f) / simd::length(t1));
+    const simd::Vec3W<F> t2 = simd::cross(n, t1);
+    const simd::Vec3W<F> none{zero, zero, zero};
+    const simd::Vec3W<F> t1Used = simd::select<F>(used, t1, none), t2Used = simd::select<F>(used, t2, none);
+    put(b.t1x, 0, t1Used.x), put(b.t1y, 0, t1Used.y), put(b.t1z, 0, t1Used.z);
+    put(b.t2x, 0, t2Used.x), put(b.t2y, 0, t2Used.y), put(b.t2z, 0, t2Used.z);
+
+    const F mA = at<F>(b.invMassA, 0), mB = at<F>(b.invMassB, 0);
+    const simd::SymMat3W<F> iA = contact_kernels::inertiaA<F>(b, 0), iB = contact_kernels::inertiaB<F>(b, 0);
+    const simd::Vec3W<F> vA = at3<F>(in.vAx, in.vAy, in.vAz, 0), wA = at3<F>(in.wAx, in.wAy, in.wAz, 0);
+    const simd::Vec3W<F> vB = at3<F>(in.vBx, in.vBy, in.vBz, 0), wB = at3<F>(in.wBx, in.wBy, in.wBz, 0);
+    for (int i = 0; i < kMaxManifoldPoints; ++i) {
+        const auto present = at<F>(in.point[i], 0) > zero;
+        if (!simd::any(present)) continue;
+        ContactBatch::Point& pt = b.points[i];
+        const simd::Vec3W<F> rA = at3<F>(pt.rAx, pt.rAy, pt.rAz, 0), rB = at3<F>(pt.rBx, pt.rBy, pt.rBz, 0);
+        const auto effective = [&](const simd::Vec3W<F>& dir) {
+            const simd::Vec3W<F> ra = simd::cross(rA, dir), rb = simd::cross(rB, dir);
+            const F sum = mA + mB + simd::dot(ra, iA * ra) + simd::dot(rb, iB * rb);
+            return simd::select(simd::andMask(present, sum > zero), F(1.0f) / sum, zero);
+        };
+        put(pt.normalMass, 0, effective(n));
+        if (friction) {
+            put(pt.tangentMass1, 0, effective(t1));
+            put(pt.tangentMass2, 0, effective(t2));
+        }
+        const simd::Vec3W<F> dv = (vB + simd::cross(wB, rB)) - (vA + simd::cross(wA, rA));
+        put(pt.relativeVelocity, 0, simd::select(present, simd::dot(dv, n), zero));
+    }
 }
 
 }  // namespace
@@ -205,11 +249,29 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     const float slop = softStep ? 0.0f : settings_.linearSlop;
     const bool warmStarting = settings_.warmStarting;
     pool.forChunks(batchCount, kManifoldChunk / kBatchLanes, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        // A colour's manifolds lie far apart in manifold order, so no hardware prefetcher follows the lanes: the
+        // next batch's manifold, pair and carried impulses are fetched while this batch is built.
+        const auto prefetchLane = [&](std::size_t at) {
+            if (at >= manifoldOfLane_.size()) return;
+            const std::uint32_t k = manifoldOfLane_[at];
+            if (k == ~0u) return;
+            const char* manifold = reinterpret_cast<const char*>(&contacts.manifolds[k]);
+            __builtin_prefetch(manifold);
+            __builtin_prefetch(manifold + sizeof(Manifold) - 1);
+            __builtin_prefetch(&contacts.pairs[k]);
+            if (warmStarting) {
+                __builtin_prefetch(&warm[k * kMaxManifoldPoints]);
+                __builtin_prefetch(&warm[k * kMaxManifoldPoints + kMaxManifoldPoints - 1]);
+            }
+        };
+        for (std::size_t lane = 0; lane < kBatchLanes; ++lane) prefetchLane(begin * kBatchLanes + lane);
         for (std::size_t bi = begin; bi < end; ++bi) {
             ContactBatch& b = batches_[bi];
             std::memset(static_cast<void*>(&b), 0, sizeof b);
+            BatchInputs lanes;
             for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
                 b.bodyA[lane] = b.bodyB[lane] = stillRow;
+                prefetchLane((bi + 1) * kBatchLanes + lane);
                 const std::uint32_t k = manifoldOfLane_[bi * kBatchLanes + lane];
                 if (k == ~0u) continue;
                 const ContactPair& pair = contacts.pairs[k];
@@ -251,11 +313,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
                 b.bodyA[lane] = A.row;
                 b.bodyB[lane] = B.row;
                 const Vec3 n = mf.normal;
-                Vec3 t1, t2;
-                tangentBasis(n, t1, t2);
                 b.nx[lane] = n.x, b.ny[lane] = n.y, b.nz[lane] = n.z;
-                b.t1x[lane] = t1.x, b.t1y[lane] = t1.y, b.t1z[lane] = t1.z;
-                b.t2x[lane] = t2.x, b.t2y[lane] = t2.y, b.t2z[lane] = t2.z;
                 b.invMassA[lane] = A.invMass;
                 b.invMassB[lane] = B.invMass;
                 A.inertia.store(b.iaXX, b.iaYY, b.iaZZ, b.iaXY, b.iaXZ, b.iaYZ, lane);
@@ -269,6 +327,11 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
                 b.massScale[lane] = sn.massScale;
                 b.impulseScale[lane] = sn.impulseScale;
                 b.slop[lane] = slop;
+                lanes.used[lane] = 1.0f;
+                lanes.vAx[lane] = A.v.x, lanes.vAy[lane] = A.v.y, lanes.vAz[lane] = A.v.z;
+                lanes.wAx[lane] = A.w.x, lanes.wAy[lane] = A.w.y, lanes.wAz[lane] = A.w.z;
+                lanes.vBx[lane] = B.v.x, lanes.vBy[lane] = B.v.y, lanes.vBz[lane] = B.v.z;
+                lanes.wBx[lane] = B.w.x, lanes.wBy[lane] = B.w.y, lanes.wBz[lane] = B.w.z;
                 for (int i = 0; i < mf.pointCount; ++i) {
                     const ContactPoint& cp = mf.points[i];
                     ContactBatch::Point& pt = b.points[i];
@@ -277,17 +340,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
                     pt.rAx[lane] = rA.x, pt.rAy[lane] = rA.y, pt.rAz[lane] = rA.z;
                     pt.rBx[lane] = rB.x, pt.rBy[lane] = rB.y, pt.rBz[lane] = rB.z;
                     pt.separation[lane] = -cp.depth;
-                    const auto effective = [&](Vec3 dir) {
-                        const simd::Vec3W<float> ra = toWide(cross(rA, dir)), rb = toWide(cross(rB, dir));
-                        const float sum =
-                            A.invMass + B.invMass + simd::dot(ra, A.inertia * ra) + simd::dot(rb, B.inertia * rb);
-                        return sum > 0 ? 1.0f / sum : 0.0f;
-                    };
-                    pt.normalMass[lane] = effective(n);
-                    pt.tangentMass1[lane] = friction_ ? effective(t1) : 0.0f;
-                    pt.tangentMass2[lane] = friction_ ? effective(t2) : 0.0f;
-                    const Vec3 dv = (B.v + cross(B.w, rB)) - (A.v + cross(A.w, rA));
-                    pt.relativeVelocity[lane] = dot(dv, n);
+                    lanes.point[i][lane] = 1.0f;
                     if (warmStarting) {
                         const PointImpulse& carried = warm[k * kMaxManifoldPoints + i];
                         pt.normalImpulse[lane] = carried.normal;
@@ -296,6 +349,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
                     }
                 }
             }
+            finishBatch(b, lanes, friction_);
         }
     });
     shockOrder_.clear();
