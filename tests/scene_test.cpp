@@ -181,6 +181,25 @@ TEST(SceneLoader, SemanticErrorsBuiltInTest) {
               {"p.json: at /shapes/a~1b/radius: must be > 0 (got -2)"});
 }
 
+TEST(SceneLoader, SolverKnobsReachTheSettings) {
+    const Scene s = parseScene(R"({"settings": {"position_correction": "soft_step", "contact_hertz": 45,
+        "contact_damping_ratio": 2, "max_push_out_velocity": 1.5, "baumgarte": 0.1, "linear_slop": 0.001,
+        "shock_propagation": true}})",
+                               "knobs.json");
+    const SolverSettings& solver = s.settings.solver;
+    EXPECT_EQ(solver.positionCorrection, PositionCorrection::SoftStep);
+    EXPECT_FLOAT_EQ(solver.contactHertz, 45.0f);
+    EXPECT_FLOAT_EQ(solver.contactDampingRatio, 2.0f);
+    EXPECT_FLOAT_EQ(solver.maxPushOutVelocity, 1.5f);
+    EXPECT_FLOAT_EQ(solver.baumgarte, 0.1f);
+    EXPECT_FLOAT_EQ(solver.linearSlop, 0.001f);
+    EXPECT_TRUE(solver.shockPropagation);
+    expectAll(errorOf([] { parseScene(R"({"settings": {"contact_hertz": 0}})", "h.json"); }),
+              {"h.json", "/settings/contact_hertz"});
+    expectAll(errorOf([] { parseScene(R"({"settings": {"linear_slop": -0.01}})", "s.json"); }),
+              {"s.json", "/settings/linear_slop"});
+}
+
 TEST(SceneLoader, SmallValidFileFillsEveryField) {
     const Scene s = loadScene(kData + "good_small.json");
     EXPECT_EQ(s.name, "small");

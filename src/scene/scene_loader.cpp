@@ -534,7 +534,8 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
     expectObject(j, at);
     checkKeys(j, at,
               {"dt", "gravity", "substeps", "velocity_iterations", "position_iterations", "threads", "integrator",
-               "effects", "broadphase", "position_correction", "warm_starting", "shock_propagation", "sleep"});
+               "effects", "broadphase", "position_correction", "warm_starting", "shock_propagation", "sleep",
+               "contact_hertz", "contact_damping_ratio", "max_push_out_velocity", "baumgarte", "linear_slop"});
     WorldSettings& s = scene.settings;
     if (j.contains("dt")) s.timeStep = getFloat(j["dt"], at / "dt", Sign::Positive);
     if (j.contains("gravity")) s.gravity = getVec3(j["gravity"], at / "gravity");
@@ -572,6 +573,14 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
     if (j.contains("warm_starting")) s.solver.warmStarting = getBool(j["warm_starting"], at / "warm_starting");
     if (j.contains("shock_propagation"))
         s.solver.shockPropagation = getBool(j["shock_propagation"], at / "shock_propagation");
+    const auto solverFloat = [&](const char* key, float& value, Sign sign) {
+        if (j.contains(key)) value = getFloat(j[key], at / key, sign);
+    };
+    solverFloat("contact_hertz", s.solver.contactHertz, Sign::Positive);
+    solverFloat("contact_damping_ratio", s.solver.contactDampingRatio, Sign::NonNegative);
+    solverFloat("max_push_out_velocity", s.solver.maxPushOutVelocity, Sign::NonNegative);
+    solverFloat("baumgarte", s.solver.baumgarte, Sign::NonNegative);
+    solverFloat("linear_slop", s.solver.linearSlop, Sign::NonNegative);
     if (j.contains("sleep")) {
         const Loc sl = at / "sleep";
         const Json& o = expectObject(j["sleep"], sl, "a sleep settings object");
