@@ -15,12 +15,23 @@ void stepScene(benchmark::State& state, const char* file) {
     rubble::World world(scene.settings);
     rubble::instantiate(scene, world);
 
+    // Constraint-iterations: each contact manifold solved once in one iteration (velocity iterations, and the
+    // position iterations where the correction has them), per second of the solver stage.
+    const rubble::WorldSettings& ws = scene.settings;
+    const bool positionPasses = ws.solver.positionCorrection != rubble::PositionCorrection::Baumgarte;
+    const double iterationsPerStep =
+        ws.substeps * (ws.velocityIterations + (positionPasses ? ws.positionIterations : 0));
     double stageMs[rubble::kStageCount] = {};
+    double constraintIterations = 0;
     for (auto _ : state) {
         world.step(scene.settings.timeStep);
         const rubble::Profile& p = world.lastProfile();
         for (int k = 0; k < rubble::kStageCount; ++k) stageMs[k] += p.stages[k].ms;
+        constraintIterations += p.constraints * iterationsPerStep;
     }
+    const double solverMs = stageMs[static_cast<int>(rubble::Stage::Solver)];
+    if (solverMs > 0)
+        state.counters["constraint_iterations_per_s"] = benchmark::Counter(constraintIterations / (solverMs * 1e-3));
     for (int k = 0; k < rubble::kStageCount; ++k)
         state.counters[std::string(rubble::stageName(static_cast<rubble::Stage>(k))) + "_ms"] =
             benchmark::Counter(stageMs[k] / static_cast<double>(state.iterations()));
