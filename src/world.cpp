@@ -658,10 +658,10 @@ void World::step(float dt) {
                 js.prepare(w.joints, w.bodies, cs, w.settings, params.dt, *w.pool);
                 if (solver.warmStarting) js.warmStart(cs.bodies());
             }
-            if (solver.warmStarting) cs.warmStart(*w.pool);
             // The joint pass is serial over all joints, so with joints the contacts go one iteration at a time;
-            // without, each block of islands runs all its iterations in one task.
-            if (joints)
+            // without, each block of islands runs its warm start and all its iterations in one task.
+            if (joints) {
+                if (solver.warmStarting) cs.warmStart(*w.pool);
                 for (int i = 0; i < w.settings.velocityIterations; ++i) {
                     {
                         detail::JointTimer jointTimer(profile);
@@ -669,8 +669,9 @@ void World::step(float dt) {
                     }
                     cs.solveVelocities(true, *w.pool);
                 }
-            else
-                cs.solveVelocities(true, *w.pool, w.settings.velocityIterations);
+            } else {
+                cs.solveVelocities(true, *w.pool, w.settings.velocityIterations, solver.warmStarting);
+            }
             if (solver.shockPropagation && !softStep) cs.propagateShock();
             if (splitImpulse) cs.solvePositions(*w.pool, w.settings.positionIterations);
             cs.storeVelocities(w.bodies.moving, *w.pool);

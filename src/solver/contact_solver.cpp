@@ -415,43 +415,43 @@ BodyRows ContactSolver::rowsFor(int worker) {
 }
 
 template <class Kernel>
-void ContactSolver::solveRange(const ColorRange& range, const BodyRows& rows, Kernel& kernel) {
+void ContactSolver::solveRange(const ColorRange& range, const BodyRows& rows, Kernel& kernel, int pass) {
     if (range.overflow) {
         // One lane at a time: these manifolds share bodies.
         for (std::size_t i = 0; i < range.batchCount; ++i)
             for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
-                kernel.template operator()<float>(batches_[range.firstBatch + i], lane, rows);
+                kernel.template operator()<float>(batches_[range.firstBatch + i], lane, rows, pass);
         return;
     }
     for (std::size_t i = 0; i < range.batchCount; ++i)
-        kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows);
+        kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows, pass);
 }
 
 template <class Kernel>
-void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel, int iterations) {
+void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel, int passes) {
     // Blocks share no body with each other or with the large islands: each runs all its iterations in one task.
     if (!blocks_.empty())
         pool.forChunks(blocks_.size(), 1, [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
             const BodyRows rows = rowsFor(worker);
             for (std::size_t bl = begin; bl < end; ++bl)
-                for (int it = 0; it < iterations; ++it)
+                for (int pass = 0; pass < passes; ++pass)
                     for (std::uint32_t c = 0; c < blocks_[bl].colorCount; ++c)
-                        solveRange(colors_[blocks_[bl].firstColor + c], rows, kernel);
+                        solveRange(colors_[blocks_[bl].firstColor + c], rows, kernel, pass);
         });
-    for (int it = 0; it < iterations; ++it)
+    for (int pass = 0; pass < passes; ++pass)
         for (std::uint32_t c = 0; c < large_.colorCount; ++c) {
             const ColorRange range = colors_[large_.firstColor + c];
             if (range.overflow) {
                 const BodyRows rows = rowsFor(0);
-                solveRange(range, rows, kernel);
+                solveRange(range, rows, kernel, pass);
                 continue;
             }
-            pool.forChunks(range.batchCount, kBatchChunk,
-                           [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
-                               const BodyRows rows = rowsFor(worker);
-                               for (std::size_t i = begin; i < end; ++i)
-                                   kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows);
-                           });
+            pool.forChunks(
+                range.batchCount, kBatchChunk, [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
+                    const BodyRows rows = rowsFor(worker);
+                    for (std::size_t i = begin; i < end; ++i)
+                        kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows, pass);
+                });
         }
 }
 
@@ -626,31 +626,35 @@ void ContactSolver::solveHeld(const ShockContact& s, const BodyRows& rows, const
 }
 
 void ContactSolver::warmStart(TaskPool& pool) {
-    forEachColor(pool, []<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
+    forEachColor(pool, []<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows, int) {
         contact_kernels::warmStart<F>(b, lane, rows);
     });
 }
 
-void ContactSolver::solveVelocities(bool useBias, TaskPool& pool, int iterations) {
+void ContactSolver::solveVelocities(bool useBias, TaskPool& pool, int iterations, bool warmStartFirst) {
     SolveParams params;
     params.invH = 1.0f / h_;
     params.maxPushOutVelocity = settings_.maxPushOutVelocity;
     params.useBias = useBias && settings_.positionCorrection != PositionCorrection::SplitImpulse;
     params.moved = moved_;
+    // With the warm start as pass 0, a block applies it in the same task as its iterations, while its rows are in
+    // the core's cache.
+    const int first = warmStartFirst ? 1 : 0;
+    const auto run = [&]<bool kFriction>() {
+        forEachColor(
+            pool,
+            [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows, int pass) {
+                if (pass < first)
+                    contact_kernels::warmStart<F>(b, lane, rows);
+                else
+                    contact_kernels::solve<F, kFriction>(b, lane, rows, params);
+            },
+            first + iterations);
+    };
     if (friction_)
-        forEachColor(
-            pool,
-            [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
-                contact_kernels::solve<F, true>(b, lane, rows, params);
-            },
-            iterations);
+        run.template operator()<true>();
     else
-        forEachColor(
-            pool,
-            [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
-                contact_kernels::solve<F, false>(b, lane, rows, params);
-            },
-            iterations);
+        run.template operator()<false>();
 }
 
 void ContactSolver::solvePositions(TaskPool& pool, int iterations) {
@@ -659,7 +663,7 @@ void ContactSolver::solvePositions(TaskPool& pool, int iterations) {
     params.maxPushOutVelocity = settings_.maxPushOutVelocity;
     forEachColor(
         pool,
-        [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
+        [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows, int) {
             contact_kernels::solvePositions<F>(b, lane, rows, params);
         },
         iterations);
@@ -695,7 +699,7 @@ void ContactSolver::applyPseudoVelocities(MovingBodies& m, TaskPool& pool) {
 
 void ContactSolver::applyRestitution(TaskPool& pool) {
     const float threshold = settings_.restitutionThreshold;
-    forEachColor(pool, [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
+    forEachColor(pool, [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows, int) {
         contact_kernels::restitution<F>(b, lane, rows, threshold);
     });
 }

@@ -94,8 +94,9 @@ public:
     void warmStart(TaskPool& pool);
     /// `iterations` velocity iterations (a block runs all of them in one task). With bias, overlap is corrected by
     /// the chosen position correction; without, only speculative gaps are respected (the relax iterations of the
-    /// soft step, and split impulses' velocity pass).
-    void solveVelocities(bool useBias, TaskPool& pool, int iterations = 1);
+    /// soft step, and split impulses' velocity pass). With `warmStartFirst`, warmStart() runs first in the same
+    /// tasks.
+    void solveVelocities(bool useBias, TaskPool& pool, int iterations = 1, bool warmStartFirst = false);
     /// Shock propagation (SolverSettings::shockPropagation): one pass over the contacts from the ground up, each
     /// contact's lower body held still. Serial, in a fixed order.
     void propagateShock();
@@ -132,10 +133,12 @@ public:
     std::uint32_t manifoldOfLane(std::size_t lane) const { return manifoldOfLane_[lane]; }
 
 private:
+    /// Runs kernel(batch, lane, rows, pass) over every colour `passes` times (pass 0, 1, ...): a block runs all its
+    /// passes in one task, the large islands colour by colour across the threads.
     template <class Kernel>
-    void forEachColor(TaskPool& pool, Kernel&& kernel, int iterations = 1);
+    void forEachColor(TaskPool& pool, Kernel&& kernel, int passes = 1);
     template <class Kernel>
-    void solveRange(const ColorRange& range, const BodyRows& rows, Kernel& kernel);
+    void solveRange(const ColorRange& range, const BodyRows& rows, Kernel& kernel, int pass);
     /// Lists the manifolds by block (blocks_ spans, then large_), into segmentManifolds_ / segmentStart_.
     void partition(const Contacts& contacts, const Islands* islands);
     BodyRows rowsFor(int worker);
