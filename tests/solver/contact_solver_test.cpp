@@ -152,7 +152,8 @@ TEST(ContactSolver, ColoursNeverHoldADynamicBodyTwice) {
 
 // Islands share no body, and greedy colouring in manifold order gives each manifold the same colour whether its
 // island is coloured alone or with every other: so blocks of small islands, each running all its iterations in one
-// task, must end bit for bit where one colouring of everything, iteration by iteration, ends.
+// task (its warm start included), must end bit for bit where one colouring of everything, iteration by iteration,
+// ends.
 TEST(ContactSolver, IslandBlocksEndWhereOneColouringEnds) {
     WorldSettings s;
     s.threads = 2;
@@ -167,6 +168,17 @@ TEST(ContactSolver, IslandBlocksEndWhereOneColouringEnds) {
                             -10.0f + 2.0f * static_cast<float>(stack / 12)};
             world.createBody(box);
         }
+    // A small island whose plate touches more boxes than there are colours: its block ends in an overflow range.
+    BodyDef plate;
+    plate.shape = world.createShape(BoxDef{{5, 0.1f, 5}});
+    plate.position = {-30, 0.1f, 0};
+    world.createBody(plate);
+    BodyDef pebble;
+    pebble.shape = world.createShape(BoxDef{{0.2f, 0.2f, 0.2f}});
+    for (int i = 0; i < 81; ++i) {
+        pebble.position = {-34.0f + static_cast<float>(i % 9), 0.4f, -4.0f + static_cast<float>(i / 9)};
+        world.createBody(pebble);
+    }
     world.applyLinearImpulse(world.bodies().back(), {30, 0, 10});
     for (int i = 0; i < 5; ++i) world.step(1.0f / 60.0f);
 
@@ -200,12 +212,16 @@ TEST(ContactSolver, IslandBlocksEndWhereOneColouringEnds) {
     };
     for (std::size_t k = 0; k < blocked.blocks().size(); ++k) claim(blocked.blocks()[k], static_cast<int>(k));
     claim(blocked.largeIslands(), -2);
+    const auto overflowIn = [&](detail::ContactSolver::ColorSpan span) {
+        return span.colorCount > 0 && blocked.colorRanges()[span.firstColor + span.colorCount - 1].overflow;
+    };
+    EXPECT_TRUE(std::any_of(blocked.blocks().begin(), blocked.blocks().end(), overflowIn))
+        << "the plate's block should need the overflow range";
 
     blocked.loadBodies(w.bodies.moving, *w.pool);
     together.loadBodies(w.bodies.moving, *w.pool);
-    blocked.warmStart(*w.pool);
     together.warmStart(*w.pool);
-    blocked.solveVelocities(true, *w.pool, 8);
+    blocked.solveVelocities(true, *w.pool, 8, /*warmStartFirst=*/true);
     for (int i = 0; i < 8; ++i) together.solveVelocities(true, *w.pool);
     std::vector<detail::PointImpulse> blockedImpulses(w.impulses.size()), togetherImpulses(w.impulses.size());
     blocked.storeImpulses(blockedImpulses, *w.pool);
