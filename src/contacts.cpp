@@ -37,6 +37,9 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
         std::uint32_t manifolds = 0, points = 0;
         std::fill(impulses.begin() + begin * kMaxManifoldPoints, impulses.begin() + end * kMaxManifoldPoints,
                   PointImpulse{});
+        // Manifolds come in canonical order, which changes little from step to step: the entry after the last
+        // match is tried before the table, so a settled scene reads last step's entries in order, not at random.
+        std::size_t next = previous_.size();
         for (std::size_t m = begin; m < end; ++m) {
             const ContactPair& p = contacts.pairs[m];
             const std::uint32_t slotA = slotOf(storage, p.a, p.aStatic), slotB = slotOf(storage, p.b, p.bStatic);
@@ -46,39 +49,48 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
             key.parts = (std::uint64_t{p.triangle} << 32) | (std::uint64_t{p.childA} << 16) | p.childB;
             currentKeys_[m] = key;
             if (table_.empty()) continue;
-            // Linear probing in a table at most half full: a miss ends at the first empty cell.
-            for (std::size_t at = hashOf(key) & mask;; at = (at + 1) & mask) {
-                const std::uint32_t entry = table_[at];
-                if (entry == 0) break;
-                const Entry& old = previous_[entry - 1];
-                if (!(old.key == key)) continue;
-                ++manifolds;
-                const Manifold& now = contacts.manifolds[m];
-                bool taken[kMaxManifoldPoints] = {};
-                bool matched[kMaxManifoldPoints] = {};
-                for (int i = 0; i < now.pointCount; ++i)
-                    for (int j = 0; j < old.pointCount; ++j)
-                        if (!taken[j] && now.points[i].feature == old.features[j]) {
-                            impulses[m * kMaxManifoldPoints + i] = old.impulses[j];
-                            taken[j] = matched[i] = true;
-                            ++points;
-                            break;
-                        }
-                for (int i = 0; i < now.pointCount; ++i) {
-                    if (matched[i]) continue;
-                    int best = -1;
-                    float bestDistanceSq = kContactMatchDistance * kContactMatchDistance;
-                    for (int j = 0; j < old.pointCount; ++j) {
-                        const Vec3 d = now.points[i].position - old.positions[j];
-                        const float distanceSq = dot(d, d);
-                        if (!taken[j] && distanceSq < bestDistanceSq) best = j, bestDistanceSq = distanceSq;
+            std::uint32_t found = 0;  // entry + 1, 0 for none
+            if (next < previous_.size() && previous_[next].key == key) {
+                found = static_cast<std::uint32_t>(next + 1);
+            } else {
+                // Linear probing in a table at most half full: a miss ends at the first empty cell.
+                for (std::size_t at = hashOf(key) & mask;; at = (at + 1) & mask) {
+                    const std::uint32_t entry = table_[at];
+                    if (entry == 0) break;
+                    if (previous_[entry - 1].key == key) {
+                        found = entry;
+                        break;
                     }
-                    if (best < 0) continue;
-                    impulses[m * kMaxManifoldPoints + i] = old.impulses[best];
-                    taken[best] = true;
-                    ++points;
                 }
-                break;
+            }
+            if (found == 0) continue;
+            next = found;  // the entry after this one
+            const Entry& old = previous_[found - 1];
+            ++manifolds;
+            const Manifold& now = contacts.manifolds[m];
+            bool taken[kMaxManifoldPoints] = {};
+            bool matched[kMaxManifoldPoints] = {};
+            for (int i = 0; i < now.pointCount; ++i)
+                for (int j = 0; j < old.pointCount; ++j)
+                    if (!taken[j] && now.points[i].feature == old.features[j]) {
+                        impulses[m * kMaxManifoldPoints + i] = old.impulses[j];
+                        taken[j] = matched[i] = true;
+                        ++points;
+                        break;
+                    }
+            for (int i = 0; i < now.pointCount; ++i) {
+                if (matched[i]) continue;
+                int best = -1;
+                float bestDistanceSq = kContactMatchDistance * kContactMatchDistance;
+                for (int j = 0; j < old.pointCount; ++j) {
+                    const Vec3 d = now.points[i].position - old.positions[j];
+                    const float distanceSq = dot(d, d);
+                    if (!taken[j] && distanceSq < bestDistanceSq) best = j, bestDistanceSq = distanceSq;
+                }
+                if (best < 0) continue;
+                impulses[m * kMaxManifoldPoints + i] = old.impulses[best];
+                taken[best] = true;
+                ++points;
             }
         }
         chunkManifolds[chunk] = manifolds;
