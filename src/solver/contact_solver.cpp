@@ -250,7 +250,9 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     const bool warmStarting = settings_.warmStarting;
     pool.forChunks(batchCount, kManifoldChunk / kBatchLanes, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         // A colour's manifolds lie far apart in manifold order, so no hardware prefetcher follows the lanes: the
-        // next batch's manifold, pair and carried impulses are fetched while this batch is built.
+        // manifold, pair and carried impulses of the lane kPrefetchLanes ahead are fetched while this one is built
+        // (a few lanes at a time: a whole batch's worth of prefetches would overrun the core's miss buffers).
+        constexpr std::size_t kPrefetchLanes = 8;
         const auto prefetchLane = [&](std::size_t at) {
             if (at >= manifoldOfLane_.size()) return;
             const std::uint32_t k = manifoldOfLane_[at];
@@ -264,14 +266,14 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
                 __builtin_prefetch(&warm[k * kMaxManifoldPoints + kMaxManifoldPoints - 1]);
             }
         };
-        for (std::size_t lane = 0; lane < kBatchLanes; ++lane) prefetchLane(begin * kBatchLanes + lane);
+        for (std::size_t lane = 0; lane < kPrefetchLanes; ++lane) prefetchLane(begin * kBatchLanes + lane);
         for (std::size_t bi = begin; bi < end; ++bi) {
             ContactBatch& b = batches_[bi];
             std::memset(static_cast<void*>(&b), 0, sizeof b);
             BatchInputs lanes;
             for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
                 b.bodyA[lane] = b.bodyB[lane] = stillRow;
-                prefetchLane((bi + 1) * kBatchLanes + lane);
+                prefetchLane(bi * kBatchLanes + lane + kPrefetchLanes);
                 const std::uint32_t k = manifoldOfLane_[bi * kBatchLanes + lane];
                 if (k == ~0u) continue;
                 const ContactPair& pair = contacts.pairs[k];
