@@ -24,7 +24,9 @@ constexpr const char* kUsage =
     "  --frames N         headless: render N frames, physics stepped 1/60 s per frame on this thread\n"
     "  --screenshot FILE  headless: write the last frame as a PNG (needs --frames)\n"
     "  --overlay          headless: draw the overlay into the screenshot too (its numbers vary from run to run)\n"
-    "  --autopilot        marble: the ball finds its way through the maze by itself\n";
+    "  --autopilot        marble: the ball finds its way through the maze by itself\n"
+    "  --layers LIST      debug layers shown at the start, comma-separated: contacts, aabbs, islands, sleeping\n"
+    "                     (default: sleeping)\n";
 
 [[noreturn]] void usageError(const std::string& message) {
     std::fprintf(stderr, "rubble-viewer: %s\n\n%s", message.c_str(), kUsage);
@@ -81,7 +83,17 @@ rubble::viewer::ViewerOptions parseOptions(int argc, char** argv) {
             overlayFlag = true;
         else if (a == "--autopilot")
             o.autopilot = true;
-        else if (!a.empty() && a[0] == '-')
+        else if (a == "--layers") {
+            o.layers = std::string(value());
+            std::string_view rest = o.layers;
+            while (!rest.empty()) {
+                const std::size_t comma = rest.find(',');
+                const std::string_view name = rest.substr(0, comma);
+                if (name != "contacts" && name != "aabbs" && name != "islands" && name != "sleeping")
+                    usageError("--layers knows contacts, aabbs, islands and sleeping, not '" + std::string(name) + "'");
+                rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
+            }
+        } else if (!a.empty() && a[0] == '-')
             usageError("unknown option '" + std::string(a) + "'");
         else if (o.scene.empty())
             o.scene = std::string(a);

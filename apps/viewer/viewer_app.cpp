@@ -488,7 +488,7 @@ void Viewer::renderFrame(const RenderFrame& frame, int width, int height) {
             if (slot == ball) c = {0.85f, 0.12f, 0.15f, 1};
             if (flags & kSnapshotFrozen) c = {1, 0, 0, 1};
             if (tintSleeping && (flags & kSnapshotAsleep)) c = {0.5f, 0.36f, 0.78f, 1};
-            if (slot == highlight)
+            if (slot == highlight && slot != ball)
                 c = {std::min(1.0f, c.r + 0.3f), std::min(1.0f, c.g + 0.3f), std::min(1.0f, c.b + 0.3f), 1};
             return c;
         },
@@ -504,6 +504,13 @@ int Viewer::run() {
     createWindow();
     const bool headless = options_.frames > 0;
     showOverlay_ = options_.overlay;
+    if (!options_.layers.empty()) {
+        const std::string& l = options_.layers;
+        layers_ = {.contacts = l.find("contacts") != std::string::npos,
+                   .aabbs = l.find("aabbs") != std::string::npos,
+                   .islands = l.find("islands") != std::string::npos,
+                   .sleeping = l.find("sleeping") != std::string::npos};
+    }
     std::unique_ptr<OffscreenTarget> target;
     if (headless)
         target = std::make_unique<OffscreenTarget>(options_.width, options_.height, 4);

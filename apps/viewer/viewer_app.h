@@ -17,6 +17,8 @@ struct ViewerOptions {
     int threads = -1;   ///< worker threads (-1: the scene's setting)
     bool overlay = true;
     bool autopilot = false;  ///< marble: the ball follows the way through the maze by itself
+    /// Debug layers to start with: any of "contacts", "aabbs", "islands", "sleeping" (comma-separated).
+    std::string layers;
 };
 
 /// Runs the viewer; returns the process exit code. Throws on errors (bad scene, no OpenGL 3.3 context).
