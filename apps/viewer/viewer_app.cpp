@@ -143,7 +143,7 @@ private:
     bool leftDown_ = false, dragged_ = false;
     float wheel_ = 0;
     std::unordered_set<int> keysDown_;
-    double renderFps_ = 0;
+    double frameSeconds_ = 0;
 };
 
 Viewer::~Viewer() {
@@ -523,7 +523,10 @@ int Viewer::run() {
         const auto now = Clock::now();
         const double wall = std::chrono::duration<double>(now - last).count();
         last = now;
-        if (wall > 0) renderFps_ = renderFps_ == 0 ? 1 / wall : 0.95 * renderFps_ + 0.05 / wall;
+        // Averaged over frame times (not rates), from the second frame on: the first has no frame before it.
+        if (frameIndex == 1) frameSeconds_ = wall;
+        if (frameIndex > 1) frameSeconds_ = 0.95 * frameSeconds_ + 0.05 * wall;
+        const double renderFps = frameSeconds_ > 0 ? 1 / frameSeconds_ : 0;
         const float dt = headless ? static_cast<float>(kHeadlessFrameSeconds) : static_cast<float>(std::min(wall, 0.1));
 
         glfwPollEvents();
@@ -553,7 +556,7 @@ int Viewer::run() {
         if (showOverlay_) {
             OverlayInfo info;
             info.title = title_;
-            info.renderFps = renderFps_;
+            info.renderFps = renderFps;
             info.frame = &frame;
             info.stats = runtime_->stats();
             info.rate = options_.rate;
