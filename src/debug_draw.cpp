@@ -35,6 +35,12 @@ void circle(DebugDraw& draw, const Transform& pose, Vec3 center, Vec3 u, Vec3 v,
 
 }  // namespace
 
+void DebugLineBatch::line(Vec3 a, Vec3 b, DebugColor color) {
+    lines.points.push_back(a);
+    lines.points.push_back(b);
+    lines.colors.push_back(color);
+}
+
 void DebugDraw::triangle(Vec3 a, Vec3 b, Vec3 c, DebugColor color) {
     line(a, b, color);
     line(b, c, color);

@@ -1,8 +1,10 @@
 #pragma once
 // Debug drawing: World::debugDraw describes what the world holds (shapes at their poses, boxes, contacts, sleeping
 // state) through this small interface, which a viewer or a game implements with its own renderer.
+#include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #include "rubble/math.h"
 
@@ -67,6 +69,26 @@ public:
     virtual void sphere(const Transform& pose, float radius, DebugColor color);
     /// Capsule along the pose's local y axis. Default: two cap circles, four side lines, two half circles per cap.
     virtual void capsule(const Transform& pose, float radius, float halfHeight, DebugColor color);
+};
+
+/// Lines in flat arrays, for a renderer to upload in one batch.
+struct DebugLines {
+    std::vector<Vec3> points;        ///< two per line
+    std::vector<DebugColor> colors;  ///< one per line
+    std::uint64_t step = 0;          ///< World::stepCount() of the world that was drawn
+    std::size_t lineCount() const { return colors.size(); }
+    /// Keeps the capacity, so a batch refilled every frame stops allocating.
+    void clear() {
+        points.clear();
+        colors.clear();
+    }
+};
+
+/// A DebugDraw that appends every call, as lines, to `lines`.
+class DebugLineBatch : public DebugDraw {
+public:
+    DebugLines lines;
+    void line(Vec3 a, Vec3 b, DebugColor color) override;
 };
 
 }  // namespace rubble

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "rubble/body.h"
+#include "rubble/debug_draw.h"
 #include "rubble/id.h"
 #include "rubble/math.h"
 #include "rubble/profile.h"
@@ -215,6 +216,16 @@ public:
     /// time, in steps. Rendering then lags the simulation by up to one step and never extrapolates.
     const RenderFrame& interpolate(double clockSeconds);
     const RenderFrame& interpolate() { return interpolate(clockTime()); }
+
+    // ---- Debug drawing ----
+
+    /// Makes whichever thread steps draw the world (World::debugDraw with `options`) into a line batch after each
+    /// step, or stops it (nullopt). The drawing costs the stepping thread its time; it never waits for the render
+    /// side (a step whose batch cannot be handed over at once is skipped). Any thread.
+    void setDebugDraw(const std::optional<DebugDrawOptions>& options);
+    /// Render side: swaps the newest batch into `lines` when one was drawn since the last call and returns true;
+    /// else returns false and leaves `lines` alone.
+    bool takeDebugLines(DebugLines& lines);
 
     struct Impl;
 

@@ -19,6 +19,7 @@ namespace rubble {
 
 class DebugDraw;
 struct DebugDrawOptions;
+struct ShapeGeometry;
 namespace detail {
 struct WorldAccess;
 }
@@ -42,6 +43,9 @@ public:
     bool isValid(ShapeId id) const;
     /// Mass properties of the shape at unit density.
     MassProperties shapeMassProperties(ShapeId id) const;
+    /// The shape as built, for renderers: sizes, and triangles of hulls, meshes and heightfields
+    /// (include/rubble/shape_geometry.h, src/shapes/shape_geometry.cpp).
+    ShapeGeometry shapeGeometry(ShapeId id) const;
 
     BodyId createBody(const BodyDef& def);
     /// O(1); other bodies' handles stay valid.

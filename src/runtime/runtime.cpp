@@ -98,6 +98,14 @@ struct Runtime::Impl {
     std::atomic<SteadyClock::rep> threadStart{0};
     std::atomic<double> manualClock{0};
 
+    // Debug drawing: the stepping thread only ever try-locks debugMutex, so it never waits for the render side.
+    std::atomic<bool> debugWanted{false};
+    std::mutex debugMutex;  ///< guards debugOptions, debugReady and debugFresh
+    DebugDrawOptions debugOptions;
+    DebugLines debugReady;
+    bool debugFresh = false;
+    DebugLineBatch debugBatch;  ///< stepping side only
+
     // Render side.
     std::mutex readerMutex;  ///< between render-side callers only; the physics thread never takes it
     RenderFrame frame;
@@ -123,6 +131,23 @@ struct Runtime::Impl {
         s.profile = world.lastProfile();
         s.stats = stats.load();
         snapshots.publish(b);
+        if (debugWanted.load(std::memory_order_relaxed)) drawDebug();
+    }
+
+    void drawDebug() {
+        DebugDrawOptions options;
+        {
+            std::unique_lock lock(debugMutex, std::try_to_lock);
+            if (!lock.owns_lock()) return;
+            options = debugOptions;
+        }
+        debugBatch.lines.clear();
+        world.debugDraw(debugBatch, options);
+        debugBatch.lines.step = world.stepCount();
+        std::unique_lock lock(debugMutex, std::try_to_lock);
+        if (!lock.owns_lock()) return;
+        std::swap(debugReady, debugBatch.lines);
+        debugFresh = true;
     }
 
     /// Applies `commands` (recording them) and runs one step that was due at `dueClock`.
@@ -400,6 +425,22 @@ std::vector<RecordedInput> Runtime::takeRecording() {
     std::vector<RecordedInput> out;
     out.swap(impl_->recording);
     return out;
+}
+
+void Runtime::setDebugDraw(const std::optional<DebugDrawOptions>& options) {
+    Impl& r = *impl_;
+    std::lock_guard lock(r.debugMutex);
+    if (options) r.debugOptions = *options;
+    r.debugWanted.store(options.has_value(), std::memory_order_relaxed);
+}
+
+bool Runtime::takeDebugLines(DebugLines& lines) {
+    Impl& r = *impl_;
+    std::lock_guard lock(r.debugMutex);
+    if (!r.debugFresh) return false;
+    std::swap(lines, r.debugReady);
+    r.debugFresh = false;
+    return true;
 }
 
 const RenderFrame& Runtime::latest(float alpha) {
