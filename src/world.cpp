@@ -1,5 +1,7 @@
 // The world: input validation at the API boundary, body and shape storage, and the step, which reads as the table
 // of contents of the engine (DESIGN.md, "One step").
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -584,6 +586,8 @@ void World::step(float dt) {
     const bool softStep = solver.positionCorrection == PositionCorrection::SoftStep;
     const bool splitImpulse = solver.positionCorrection == PositionCorrection::SplitImpulse;
     bool collided = false;
+    // Time in the joints' passes, summed over the threads that ran them (blocks run their joints in their tasks).
+    std::atomic<detail::Clock::rep> jointNs{0};
     for (int sub = 0; sub < substeps; ++sub) {
         const bool lastSub = sub == substeps - 1;
         params.forces = w.forcesPending;
@@ -656,22 +660,21 @@ void World::step(float dt) {
             if (joints) {
                 detail::JointTimer jointTimer(profile);
                 js.prepare(w.joints, w.bodies, cs, w.settings, params.dt, *w.pool);
-                if (solver.warmStarting) js.warmStart(cs.bodies());
+                js.partition(cs, w.islands);
             }
-            // The joint pass is serial over all joints, so with joints the contacts go one iteration at a time;
-            // without, each block of islands runs its warm start and all its iterations in one task.
-            if (joints) {
-                if (solver.warmStarting) cs.warmStart(*w.pool);
-                for (int i = 0; i < w.settings.velocityIterations; ++i) {
-                    {
-                        detail::JointTimer jointTimer(profile);
-                        js.solve(cs.bodies(), true);
-                    }
-                    cs.solveVelocities(true, *w.pool);
-                }
-            } else {
-                cs.solveVelocities(true, *w.pool, w.settings.velocityIterations, solver.warmStarting);
-            }
+            // Each segment of the solve (a block of small islands in its own task, or the large islands) runs its
+            // joints, then its contact colours, in every pass; with warm starting, pass 0 is the warm start.
+            const bool warm = solver.warmStarting;
+            auto velocityJoints = [&](std::uint32_t segment, int pass) {
+                const auto jointBegin = detail::Clock::now();
+                if (warm && pass == 0)
+                    js.warmStart(cs.bodies(), segment);
+                else
+                    js.solve(cs.bodies(), true, segment);
+                jointNs.fetch_add((detail::Clock::now() - jointBegin).count(), std::memory_order_relaxed);
+            };
+            const detail::JointPass velocityPass = velocityJoints;
+            cs.solveVelocities(true, *w.pool, w.settings.velocityIterations, warm, joints ? &velocityPass : nullptr);
             if (solver.shockPropagation && !softStep) cs.propagateShock();
             if (splitImpulse) cs.solvePositions(*w.pool, w.settings.positionIterations);
             cs.storeVelocities(w.bodies.moving, *w.pool);
@@ -690,16 +693,15 @@ void World::step(float dt) {
             const bool bounce = lastSub && w.effects.has(Effect::Restitution);
             if (relax || bounce) {
                 cs.loadBodies(w.bodies.moving, *w.pool);
-                if (relax && joints)
-                    for (int i = 0; i < w.settings.positionIterations; ++i) {
-                        {
-                            detail::JointTimer jointTimer(profile);
-                            w.jointSolver.solve(cs.bodies(), false);
-                        }
-                        cs.solveVelocities(false, *w.pool);
-                    }
-                else if (relax)
-                    cs.solveVelocities(false, *w.pool, w.settings.positionIterations);
+                auto relaxJoints = [&](std::uint32_t segment, int) {
+                    const auto jointBegin = detail::Clock::now();
+                    w.jointSolver.solve(cs.bodies(), false, segment);
+                    jointNs.fetch_add((detail::Clock::now() - jointBegin).count(), std::memory_order_relaxed);
+                };
+                const detail::JointPass relaxPass = relaxJoints;
+                if (relax)
+                    cs.solveVelocities(false, *w.pool, w.settings.positionIterations, false,
+                                       joints ? &relaxPass : nullptr);
                 if (bounce) cs.applyRestitution(*w.pool);
                 cs.storeVelocities(w.bodies.moving, *w.pool);
             }
@@ -722,6 +724,7 @@ void World::step(float dt) {
     profile.sleepingBodies = w.sleeping.sleepingBodies();
     w.forcesPending = false;
     if (joints) {
+        profile.jointMs += std::chrono::duration<double, std::milli>(detail::Clock::duration(jointNs.load())).count();
         profile.brokenJoints = static_cast<std::uint32_t>(w.joints.brokenReports().size() - brokenBefore);
         if (profile.brokenJoints > 0) w.effectsDirty = true;
     }

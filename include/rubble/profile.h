@@ -56,7 +56,8 @@ struct Profile {
     float laneOccupancy = 0;                   ///< filled SIMD lanes over lanes used by the solver, in [0, 1]
     std::uint32_t joints = 0;        ///< joints that acted in this step (unbroken; zero when joints did not run)
     std::uint32_t brokenJoints = 0;  ///< joints that broke in this step
-    /// Wall time of the joint solver's work inside the solver stage (rows, warm start, iterations), ms.
+    /// Time of the joint solver's work inside the solver stage (rows, warm start, iterations), ms; the iterations of
+    /// joints in blocks of small islands run in the blocks' tasks, and their time is summed over the threads.
     double jointMs = 0;
     std::uint32_t islands = 0;         ///< islands of dynamic bodies (a body alone is an island), asleep included
     std::uint32_t largestIsland = 0;   ///< bodies in the largest island

@@ -28,6 +28,8 @@ constexpr std::size_t kLargeIslandManifolds = 1024;
 /// A block is closed once it holds this many manifolds: enough per colour to fill the SIMD lanes, few enough that
 /// a block's constraint rows (about 400 bytes per manifold) stay in the core's own cache across the iterations.
 constexpr std::size_t kBlockManifolds = 256;
+/// Before colouring, segmentOfIsland_ names segments; this one is the large islands'.
+constexpr std::uint32_t kLargeSegment = ~0u;
 /// Shock propagation: passes over each level's contacts.
 constexpr int kShockPasses = 4;
 
@@ -156,6 +158,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     stats_ = {};
     std::uint32_t batchCount = 0;
     const std::size_t segmentCount = segmentStart_.size() - 1;
+    blockOfSegment_.assign(segmentCount, kLargeSegment);
     for (std::size_t segment = 0; segment < segmentCount; ++segment) {
         const bool largePart = segment + 1 == segmentCount;
         const std::uint32_t* first = segmentManifolds_.data() + segmentStart_[segment];
@@ -198,10 +201,13 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
             batchCount += n;
         }
         const ColorSpan filledSpan{span.firstColor, static_cast<std::uint32_t>(colors_.size()) - span.firstColor};
-        if (largePart)
+        if (largePart) {
             large_ = filledSpan;
-        else if (filledSpan.colorCount > 0)
-            blocks_.push_back(filledSpan);
+        } else {
+            blockOfSegment_[segment] =
+                filledSpan.colorCount > 0 ? static_cast<std::uint32_t>(blocks_.size()) : kLargeSegment;
+            if (filledSpan.colorCount > 0) blocks_.push_back(filledSpan);
+        }
         stats_.constraints += constraints;
         stats_.colors = std::max(stats_.colors, filledSpan.colorCount);
         if (largePart) stats_.largeIslandConstraints = constraints;
@@ -212,6 +218,11 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
             if (c != kNoColor) manifoldOfLane_[std::size_t{colorFirstBatch[c]} * kBatchLanes + filled[c]++] = *it;
         }
     }
+    // Islands in a block that kept no constraint are solved with the large islands (their joints, say).
+    for (std::uint32_t& segment : segmentOfIsland_)
+        segment = segment == kLargeSegment || blockOfSegment_[segment] == kLargeSegment
+                      ? static_cast<std::uint32_t>(blocks_.size())
+                      : blockOfSegment_[segment];
     // Jointed bodies after the contacts' own, in the joints' order.
     if (joints)
         for (std::uint32_t dense : joints->bodies) touch(dense);
@@ -430,17 +441,20 @@ void ContactSolver::solveRange(const ColorRange& range, const BodyRows& rows, Ke
 }
 
 template <class Kernel>
-void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel, int passes) {
+void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel, int passes, const JointPass* joints) {
     // Blocks share no body with each other or with the large islands: each runs all its iterations in one task.
     if (!blocks_.empty())
         pool.forChunks(blocks_.size(), 1, [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
             const BodyRows rows = rowsFor(worker);
             for (std::size_t bl = begin; bl < end; ++bl)
-                for (int pass = 0; pass < passes; ++pass)
+                for (int pass = 0; pass < passes; ++pass) {
+                    if (joints) (*joints)(static_cast<std::uint32_t>(bl), pass);
                     for (std::uint32_t c = 0; c < blocks_[bl].colorCount; ++c)
                         solveRange(colors_[blocks_[bl].firstColor + c], rows, kernel, pass);
+                }
         });
-    for (int pass = 0; pass < passes; ++pass)
+    for (int pass = 0; pass < passes; ++pass) {
+        if (joints) (*joints)(static_cast<std::uint32_t>(blocks_.size()), pass);
         for (std::uint32_t c = 0; c < large_.colorCount; ++c) {
             const ColorRange range = colors_[large_.firstColor + c];
             if (range.overflow) {
@@ -455,12 +469,14 @@ void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel, int passes) {
                         kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows, pass);
                 });
         }
+    }
 }
 
 void ContactSolver::partition(const Contacts& contacts, const Islands* islands) {
     const std::size_t manifoldCount = contacts.manifolds.size();
     segmentManifolds_.clear();
     segmentStart_.assign(1, 0);
+    segmentOfIsland_.clear();
     const bool useIslands = islands && islands->count() > 0 && islands->manifolds.size() <= manifoldCount;
     if (!useIslands) {
         segmentManifolds_.resize(manifoldCount);
@@ -469,10 +485,13 @@ void ContactSolver::partition(const Contacts& contacts, const Islands* islands) 
         return;
     }
     placed_.assign(manifoldCount, 0);
+    segmentOfIsland_.assign(islands->count(), kLargeSegment);
     const auto blockSize = [&] { return segmentManifolds_.size() - segmentStart_.back(); };
     for (std::uint32_t k = 0; k < islands->count(); ++k) {
         const std::uint32_t first = islands->manifoldStart[k], last = islands->manifoldStart[k + 1];
         if (last == first || last - first > kLargeIslandManifolds) continue;
+        // The block being filled; blocks that end up with no constraint are dropped after colouring (see prepare).
+        segmentOfIsland_[k] = static_cast<std::uint32_t>(segmentStart_.size() - 1);
         for (std::uint32_t i = first; i < last; ++i) {
             segmentManifolds_.push_back(islands->manifolds[i]);
             placed_[islands->manifolds[i]] = 1;
@@ -633,7 +652,8 @@ void ContactSolver::warmStart(TaskPool& pool) {
     });
 }
 
-void ContactSolver::solveVelocities(bool useBias, TaskPool& pool, int iterations, bool warmStartFirst) {
+void ContactSolver::solveVelocities(bool useBias, TaskPool& pool, int iterations, bool warmStartFirst,
+                                    const JointPass* joints) {
     SolveParams params;
     params.invH = 1.0f / h_;
     params.maxPushOutVelocity = settings_.maxPushOutVelocity;
@@ -651,7 +671,7 @@ void ContactSolver::solveVelocities(bool useBias, TaskPool& pool, int iterations
                 else
                     contact_kernels::solve<F, kFriction>(b, lane, rows, params);
             },
-            first + iterations);
+            first + iterations, joints);
     };
     if (friction_)
         run.template operator()<true>();

@@ -21,13 +21,17 @@
 #include "body_storage.h"
 #include "contacts.h"
 #include "narrowphase/narrowphase_stage.h"
+#include "parallel.h"
 #include "rubble/settings.h"
 #include "solver/contact_batch.h"
 
 namespace rubble::detail {
 
-class TaskPool;
 struct Islands;
+
+/// The joints' share of one pass over the contacts, for one segment: a block's joints (segment = block index) or the
+/// large islands' joints (segment = number of blocks). Pass 0 is the warm start when the call asks for one.
+using JointPass = FunctionRef<void(std::uint32_t segment, int pass)>;
 
 /// The solver's view of the bodies in contact: velocities and the motion since prepare(), by solver index.
 /// Rows [0, count) are the moving bodies the constraints touch, row `count` is the still body that stands for
@@ -79,6 +83,7 @@ public:
 
     /// The body rows, shared with the joint solver (valid from loadBodies() to storeVelocities()).
     SolverBodies& bodies() { return bodies_; }
+    const SolverBodies& bodies() const { return bodies_; }
     /// Row of a moving body (by dense index) since the last prepare(), or -1 when it has none.
     std::int32_t solverIndexOf(std::uint32_t dense) const {
         return dense < solverIndex_.size() ? solverIndex_[dense] : -1;
@@ -95,8 +100,14 @@ public:
     /// `iterations` velocity iterations (a block runs all of them in one task). With bias, overlap is corrected by
     /// the chosen position correction; without, only speculative gaps are respected (the relax iterations of the
     /// soft step, and split impulses' velocity pass). With `warmStartFirst`, warmStart() runs first in the same
-    /// tasks.
-    void solveVelocities(bool useBias, TaskPool& pool, int iterations = 1, bool warmStartFirst = false);
+    /// tasks. With `joints`, each pass of a segment starts with its joints' pass (a block's joints in the block's task,
+    /// the large islands' joints on the calling thread before their colours).
+    void solveVelocities(bool useBias, TaskPool& pool, int iterations = 1, bool warmStartFirst = false,
+                         const JointPass* joints = nullptr);
+    /// The segment an island's constraints are solved in since the last prepare(): its block, or blocks().size().
+    std::uint32_t segmentOfIsland(std::uint32_t island) const {
+        return island < segmentOfIsland_.size() ? segmentOfIsland_[island] : static_cast<std::uint32_t>(blocks_.size());
+    }
     /// Shock propagation (SolverSettings::shockPropagation): one pass over the contacts from the ground up, each
     /// contact's lower body held still. Serial, in a fixed order.
     void propagateShock();
@@ -136,7 +147,7 @@ private:
     /// Runs kernel(batch, lane, rows, pass) over every colour `passes` times (pass 0, 1, ...): a block runs all its
     /// passes in one task, the large islands colour by colour across the threads.
     template <class Kernel>
-    void forEachColor(TaskPool& pool, Kernel&& kernel, int passes = 1);
+    void forEachColor(TaskPool& pool, Kernel&& kernel, int passes = 1, const JointPass* joints = nullptr);
     template <class Kernel>
     void solveRange(const ColorRange& range, const BodyRows& rows, Kernel& kernel, int pass);
     /// Lists the manifolds by block (blocks_ spans, then large_), into segmentManifolds_ / segmentStart_.
@@ -176,6 +187,8 @@ private:
     std::vector<std::uint32_t> segmentManifolds_;  ///< manifold indices by segment: each block, then the large part
     std::vector<std::uint32_t> segmentStart_;      ///< segment k is segmentManifolds_[segmentStart_[k], ...[k + 1])
     std::vector<std::uint8_t> placed_;             ///< per manifold: listed in a block
+    std::vector<std::uint32_t> segmentOfIsland_;   ///< per island: its block, or blocks_.size()
+    std::vector<std::uint32_t> blockOfSegment_;    ///< prepare scratch: a segment's block, if it kept constraints
     std::vector<std::int32_t> solverIndex_;        ///< dense index of a moving body -> solver index, -1 if untouched
     std::vector<std::uint64_t> bodyColors_;        ///< per solver index: colours that already hold the body
     std::vector<std::uint32_t> colorOf_;

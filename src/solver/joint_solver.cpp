@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "islands.h"
 #include "parallel.h"
 
 namespace rubble::detail {
@@ -272,19 +273,27 @@ void JointSolver::prepare(const JointStore& store, const BodyStorage& storage, c
     });
 }
 
+void JointSolver::warmStartRow(const JointRow& r, SolverBodies& rows) const {
+    if (!r.active) return;
+    Bodies s(r, rows);
+    if (r.type == JointType::Distance || r.type == JointType::Spring)
+        s.applyLinear(r.axis * r.axialImpulse);
+    else
+        s.applyLinear(r.linearImpulse);
+    if (r.type == JointType::Hinge)
+        s.applyAngular(r.t1 * r.angularImpulse1 + r.t2 * r.angularImpulse2 +
+                       r.hingeAxis * (r.motorImpulse + r.lowerImpulse - r.upperImpulse));
+    s.store(rows);
+}
+
 void JointSolver::warmStart(SolverBodies& rows) const {
-    for (const JointRow& r : rows_) {
-        if (!r.active) continue;
-        Bodies s(r, rows);
-        if (r.type == JointType::Distance || r.type == JointType::Spring)
-            s.applyLinear(r.axis * r.axialImpulse);
-        else
-            s.applyLinear(r.linearImpulse);
-        if (r.type == JointType::Hinge)
-            s.applyAngular(r.t1 * r.angularImpulse1 + r.t2 * r.angularImpulse2 +
-                           r.hingeAxis * (r.motorImpulse + r.lowerImpulse - r.upperImpulse));
-        s.store(rows);
-    }
+    for (const JointRow& r : rows_) warmStartRow(r, rows);
+}
+
+void JointSolver::warmStart(SolverBodies& rows, std::uint32_t segment) const {
+    if (segment + 1 >= segmentStart_.size()) return;
+    for (std::uint32_t i = segmentStart_[segment]; i < segmentStart_[segment + 1]; ++i)
+        warmStartRow(rows_[segmentRows_[i]], rows);
 }
 
 namespace {
@@ -308,57 +317,87 @@ void solveLimit(Bodies& s, const JointRow& r, float error, float sign, float& ac
 
 }  // namespace
 
+void JointSolver::solveRow(JointRow& r, SolverBodies& rows, bool useBias, float invH) {
+    if (!r.active) return;
+    const bool isSpring = r.type == JointType::Spring;
+    if (isSpring && !useBias) return;
+    // Relaxing (no bias) makes the rigid rows hard and unbiased; springs keep their softness always.
+    const bool biased = useBias || isSpring;
+    const float biasRate = biased ? r.biasRate : 0.0f;
+    const float massScale = biased ? r.massScale : 1.0f;
+    const float impulseScale = biased ? r.impulseScale : 0.0f;
+    Bodies s(r, rows);
+
+    if (r.type == JointType::Hinge) {
+        if (r.motor) {
+            const float speed = dot(r.hingeAxis, s.angularVelocity());
+            const float old = r.motorImpulse;
+            r.motorImpulse =
+                std::clamp(old - r.axisMass * (speed - r.motorSpeed), -r.maxMotorImpulse, r.maxMotorImpulse);
+            s.applyAngular(r.hingeAxis * (r.motorImpulse - old));
+        }
+        if (r.limit) {
+            solveLimit(s, r, r.lowerError, 1.0f, r.lowerImpulse, invH, useBias);
+            solveLimit(s, r, r.upperError, -1.0f, r.upperImpulse, invH, useBias);
+        }
+        const Vec3 w = s.angularVelocity();
+        const float c1 = dot(r.t1, w) + biasRate * r.angularError[0];
+        const float c2 = dot(r.t2, w) + biasRate * r.angularError[1];
+        const float l1 =
+            -massScale * (r.angularMass[0] * c1 + r.angularMass[2] * c2) - impulseScale * r.angularImpulse1;
+        const float l2 =
+            -massScale * (r.angularMass[2] * c1 + r.angularMass[1] * c2) - impulseScale * r.angularImpulse2;
+        r.angularImpulse1 += l1;
+        r.angularImpulse2 += l2;
+        s.applyAngular(r.t1 * l1 + r.t2 * l2);
+    }
+
+    if (r.type == JointType::Distance || isSpring) {
+        const float speed = dot(r.axis, s.pointVelocity());
+        const float impulse =
+            -massScale * r.axialMass * (speed + biasRate * r.axialError) - impulseScale * r.axialImpulse;
+        r.axialImpulse += impulse;
+        s.applyLinear(r.axis * impulse);
+    } else {
+        const Vec3 rhs = s.pointVelocity() + r.pointError * biasRate;
+        const Vec3 impulse = (r.pointMass * rhs) * -massScale - r.linearImpulse * impulseScale;
+        r.linearImpulse += impulse;
+        s.applyLinear(impulse);
+    }
+    s.store(rows);
+}
+
 void JointSolver::solve(SolverBodies& rows, bool useBias) {
     const float invH = 1.0f / h_;
-    for (JointRow& r : rows_) {
-        if (!r.active) continue;
-        const bool isSpring = r.type == JointType::Spring;
-        if (isSpring && !useBias) continue;
-        // Relaxing (no bias) makes the rigid rows hard and unbiased; springs keep their softness always.
-        const bool biased = useBias || isSpring;
-        const float biasRate = biased ? r.biasRate : 0.0f;
-        const float massScale = biased ? r.massScale : 1.0f;
-        const float impulseScale = biased ? r.impulseScale : 0.0f;
-        Bodies s(r, rows);
+    for (JointRow& r : rows_) solveRow(r, rows, useBias, invH);
+}
 
-        if (r.type == JointType::Hinge) {
-            if (r.motor) {
-                const float speed = dot(r.hingeAxis, s.angularVelocity());
-                const float old = r.motorImpulse;
-                r.motorImpulse =
-                    std::clamp(old - r.axisMass * (speed - r.motorSpeed), -r.maxMotorImpulse, r.maxMotorImpulse);
-                s.applyAngular(r.hingeAxis * (r.motorImpulse - old));
-            }
-            if (r.limit) {
-                solveLimit(s, r, r.lowerError, 1.0f, r.lowerImpulse, invH, useBias);
-                solveLimit(s, r, r.upperError, -1.0f, r.upperImpulse, invH, useBias);
-            }
-            const Vec3 w = s.angularVelocity();
-            const float c1 = dot(r.t1, w) + biasRate * r.angularError[0];
-            const float c2 = dot(r.t2, w) + biasRate * r.angularError[1];
-            const float l1 =
-                -massScale * (r.angularMass[0] * c1 + r.angularMass[2] * c2) - impulseScale * r.angularImpulse1;
-            const float l2 =
-                -massScale * (r.angularMass[2] * c1 + r.angularMass[1] * c2) - impulseScale * r.angularImpulse2;
-            r.angularImpulse1 += l1;
-            r.angularImpulse2 += l2;
-            s.applyAngular(r.t1 * l1 + r.t2 * l2);
-        }
+void JointSolver::solve(SolverBodies& rows, bool useBias, std::uint32_t segment) {
+    if (segment + 1 >= segmentStart_.size()) return;
+    const float invH = 1.0f / h_;
+    for (std::uint32_t i = segmentStart_[segment]; i < segmentStart_[segment + 1]; ++i)
+        solveRow(rows_[segmentRows_[i]], rows, useBias, invH);
+}
 
-        if (r.type == JointType::Distance || isSpring) {
-            const float speed = dot(r.axis, s.pointVelocity());
-            const float impulse =
-                -massScale * r.axialMass * (speed + biasRate * r.axialError) - impulseScale * r.axialImpulse;
-            r.axialImpulse += impulse;
-            s.applyLinear(r.axis * impulse);
-        } else {
-            const Vec3 rhs = s.pointVelocity() + r.pointError * biasRate;
-            const Vec3 impulse = (r.pointMass * rhs) * -massScale - r.linearImpulse * impulseScale;
-            r.linearImpulse += impulse;
-            s.applyLinear(impulse);
-        }
-        s.store(rows);
-    }
+void JointSolver::partition(const ContactSolver& contacts, const Islands& islands) {
+    // Counting sort of the active joints by segment, stable so that each segment keeps the store order. A joint's
+    // island is its dynamic body's (both bodies of a joint between dynamic bodies share one).
+    const std::uint32_t segments = static_cast<std::uint32_t>(contacts.blocks().size()) + 1;
+    const std::vector<std::uint32_t>& moving = contacts.bodies().moving;
+    const auto segmentOf = [&](const JointRow& r) {
+        const std::int32_t row = r.dynamicA ? r.rowA : r.rowB;
+        const std::uint32_t dense = moving[static_cast<std::size_t>(row)];
+        const std::uint32_t island = dense < islands.islandOf.size() ? islands.islandOf[dense] : kNoIsland;
+        return island == kNoIsland ? segments - 1 : std::min(contacts.segmentOfIsland(island), segments - 1);
+    };
+    segmentStart_.assign(segments + 1, 0);
+    for (const JointRow& r : rows_)
+        if (r.active) ++segmentStart_[segmentOf(r) + 1];
+    for (std::uint32_t k = 0; k < segments; ++k) segmentStart_[k + 1] += segmentStart_[k];
+    segmentRows_.resize(segmentStart_[segments]);
+    std::vector<std::uint32_t> fill(segmentStart_.begin(), segmentStart_.end() - 1);
+    for (std::uint32_t i = 0; i < rows_.size(); ++i)
+        if (rows_[i].active) segmentRows_[fill[segmentOf(rows_[i])]++] = i;
 }
 
 void JointSolver::finish(JointStore& store) {

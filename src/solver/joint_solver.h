@@ -4,9 +4,10 @@
 // both read and write the same body rows (ContactSolver::bodies()), which prepare() gives to every body a joint
 // touches.
 //
-// Joints are solved serially on the calling thread, in the joint store's dense order: the result does not depend on
-// the thread count, and a joint costs a few tens of nanoseconds per iteration (perf/joint_solver_perf.cpp measures
-// it), so thousands of joints cost less than a millisecond. Their rows are built in parallel.
+// Joints are solved serially within their island's segment of the contact solve (ContactSolver::segmentOfIsland):
+// a block of small islands solves its joints in its own task, the large islands' joints run on the calling thread,
+// each in the joint store's dense order, so the result does not depend on the thread count. A joint costs a few
+// tens of nanoseconds per iteration (perf/joint_solver_perf.cpp measures it). Their rows are built in parallel.
 //
 // Position error is fed back in the velocity rows. With Baumgarte (and with split impulses, whose pseudo-velocities
 // only serve contacts) a fraction SolverSettings::baumgarte of the error is removed per substep; with the soft step
@@ -27,6 +28,7 @@
 namespace rubble::detail {
 
 class TaskPool;
+struct Islands;
 
 /// Symmetric 3x3 matrix (world inverse inertias, effective masses).
 struct JointSym3 {
@@ -81,11 +83,17 @@ public:
     /// warm starting). Call after ContactSolver::loadBodies.
     void prepare(const JointStore& store, const BodyStorage& bodies, const ContactSolver& contacts,
                  const WorldSettings& settings, float h, TaskPool& pool);
-    /// Applies the accumulated impulses to the body rows.
+    /// Lists the active joints by the contact solver's segment of their island (call after prepare(), and after
+    /// the contact solver's prepare() with the same islands).
+    void partition(const ContactSolver& contacts, const Islands& islands);
+    /// Applies the accumulated impulses to the body rows: every joint's, or one segment's (after partition()).
     void warmStart(SolverBodies& rows) const;
-    /// One iteration over every joint. Without bias (the soft step's relax iterations) rigid rows only remove
-    /// relative velocity and springs are left alone: their softness is the physics, not a correction.
+    void warmStart(SolverBodies& rows, std::uint32_t segment) const;
+    /// One iteration over every joint, or over one segment's. Without bias (the soft step's relax iterations) rigid
+    /// rows only remove relative velocity and springs are left alone: their softness is the physics, not a
+    /// correction.
     void solve(SolverBodies& rows, bool useBias);
+    void solve(SolverBodies& rows, bool useBias, std::uint32_t segment);
     /// Keeps the impulses for the next substep, records the reaction force and torque, and breaks the joints whose
     /// force or torque exceeded their threshold (they are skipped from then on).
     void finish(JointStore& store);
@@ -93,7 +101,12 @@ public:
     const std::vector<JointRow>& rows() const { return rows_; }
 
 private:
+    void warmStartRow(const JointRow& r, SolverBodies& rows) const;
+    void solveRow(JointRow& r, SolverBodies& rows, bool useBias, float invH);
+
     std::vector<JointRow> rows_;
+    std::vector<std::uint32_t> segmentStart_;  ///< segment k's joints are segmentRows_[segmentStart_[k], ...[k + 1])
+    std::vector<std::uint32_t> segmentRows_;   ///< indices into rows_, in store order within a segment
     float h_ = 0;
 };
 

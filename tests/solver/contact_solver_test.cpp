@@ -12,6 +12,7 @@
 #include "rubble/world.h"
 #include "solver/contact_batch.h"
 #include "solver/contact_solver.h"
+#include "solver/joint_solver.h"
 #include "support/contact_batches.h"
 #include "world_access.h"
 
@@ -242,6 +243,98 @@ TEST(ContactSolver, IslandBlocksEndWhereOneColouringEnds) {
         ++compared;
     }
     EXPECT_GT(compared, 600u);
+}
+
+// Jointed islands in blocks: each block solves its own joints in its task before its colours, and the large
+// islands' joints (a hanging chain with no contact) run before theirs. Per island that is the order of one serial
+// joint pass over the store followed by one colouring of everything, so the two must end bit for bit alike.
+TEST(ContactSolver, JointsInBlocksEndWhereTheSerialJointPassEnds) {
+    WorldSettings s;
+    s.threads = 2;
+    s.effects = s.effects.without(Effect::Sleeping);
+    World world(s);
+    BodyDef ground;
+    ground.type = BodyType::Static;
+    ground.shape = world.createShape(BoxDef{{60, 0.5f, 60}});
+    ground.position = {0, -0.5f, 0};
+    const BodyId groundId = world.createBody(ground);
+    BodyDef box;
+    box.shape = world.createShape(BoxDef{{0.3f, 0.3f, 0.3f}});
+    for (int k = 0; k < 150; ++k) {  // hinged pairs of boxes lying on the ground, one island each
+        const float x = -30.0f + 2.0f * static_cast<float>(k % 30), z = -10.0f + 4.0f * static_cast<float>(k / 30);
+        box.position = {x, 0.3f, z};
+        const BodyId a = world.createBody(box);
+        box.position = {x + 0.6f, 0.3f, z};
+        const BodyId b = world.createBody(box);
+        HingeJointDef hinge;
+        hinge.bodyA = a, hinge.bodyB = b;
+        hinge.localAnchorA = {0.3f, 0, 0}, hinge.localAnchorB = {-0.3f, 0, 0};
+        hinge.localAxisA = hinge.localAxisB = {0, 0, 1};
+        world.createJoint(hinge);
+        world.applyLinearImpulse(b, {0, 2.0f + 0.1f * static_cast<float>(k % 7), 0});
+    }
+    BodyDef link;
+    link.shape = world.createShape(SphereDef{0.1f});
+    BodyId previous = groundId;
+    for (int k = 0; k < 20; ++k) {  // a chain hung from the ground box's far corner, touching nothing
+        link.position = {50.0f + 0.3f * static_cast<float>(k + 1), 10.0f, 50.0f};
+        const BodyId current = world.createBody(link);
+        DistanceJointDef rod;
+        rod.bodyA = previous, rod.bodyB = current;
+        rod.localAnchorA = previous == groundId ? Vec3{50.0f, 10.5f, 50.0f} : Vec3{};
+        world.createJoint(rod);
+        previous = current;
+    }
+    for (int i = 0; i < 4; ++i) world.step(1.0f / 60.0f);
+
+    World::Impl& w = detail::WorldAccess::of(world);
+    const float h = 1.0f / 60.0f;
+    detail::ContactSolver blocked, together;
+    blocked.prepare(w.contacts, w.impulses, w.bodies, w.settings, w.effects, h, *w.pool, &w.jointCoupling, &w.islands);
+    together.prepare(w.contacts, w.impulses, w.bodies, w.settings, w.effects, h, *w.pool, &w.jointCoupling);
+    ASSERT_GE(blocked.blocks().size(), 1u);
+    blocked.loadBodies(w.bodies.moving, *w.pool);
+    together.loadBodies(w.bodies.moving, *w.pool);
+    detail::JointSolver blockedJoints, togetherJoints;
+    blockedJoints.prepare(w.joints, w.bodies, blocked, w.settings, h, *w.pool);
+    togetherJoints.prepare(w.joints, w.bodies, together, w.settings, h, *w.pool);
+    blockedJoints.partition(blocked, w.islands);
+
+    auto jointPass = [&](std::uint32_t segment, int pass) {
+        if (pass == 0)
+            blockedJoints.warmStart(blocked.bodies(), segment);
+        else
+            blockedJoints.solve(blocked.bodies(), true, segment);
+    };
+    const detail::JointPass pass = jointPass;
+    blocked.solveVelocities(true, *w.pool, 8, /*warmStartFirst=*/true, &pass);
+    togetherJoints.warmStart(together.bodies());
+    together.warmStart(*w.pool);
+    for (int i = 0; i < 8; ++i) {
+        togetherJoints.solve(together.bodies(), true);
+        together.solveVelocities(true, *w.pool);
+    }
+
+    ASSERT_EQ(blockedJoints.rows().size(), togetherJoints.rows().size());
+    for (std::size_t j = 0; j < blockedJoints.rows().size(); ++j) {
+        const detail::JointRow &x = blockedJoints.rows()[j], &y = togetherJoints.rows()[j];
+        const float a[4] = {x.linearImpulse.x, x.linearImpulse.y, x.axialImpulse, x.angularImpulse1};
+        const float b[4] = {y.linearImpulse.x, y.linearImpulse.y, y.axialImpulse, y.angularImpulse1};
+        EXPECT_EQ(std::memcmp(a, b, sizeof a), 0) << "joint " << j;
+    }
+    std::size_t compared = 0;
+    for (std::uint32_t dense = 0; dense < w.bodies.moving.size(); ++dense) {
+        const std::int32_t a = blocked.solverIndexOf(dense), b = together.solverIndexOf(dense);
+        ASSERT_EQ(a < 0, b < 0);
+        if (a < 0) continue;
+        const detail::SolverBodies &x = blocked.bodies(), &y = together.bodies();
+        const std::size_t i = static_cast<std::size_t>(a), j = static_cast<std::size_t>(b);
+        const float vx[6] = {x.vx[i], x.vy[i], x.vz[i], x.wx[i], x.wy[i], x.wz[i]};
+        const float vy[6] = {y.vx[j], y.vy[j], y.vz[j], y.wx[j], y.wy[j], y.wz[j]};
+        EXPECT_EQ(std::memcmp(vx, vy, sizeof vx), 0) << "body " << dense;
+        ++compared;
+    }
+    EXPECT_EQ(compared, 320u);
 }
 
 struct Rows {
