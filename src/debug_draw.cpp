@@ -248,7 +248,8 @@ struct Drawer {
         if (j.type != JointType::Hinge) return;
         const float size = options.jointSize;
         const Vec3 axis = j.localAxisA;  // unit, A's frame
-        draw.line(apply(poseA, axis * -size), apply(poseA, axis * size), color);
+        const Vec3 worldAxis = rotate(poseA.rotation, axis) * size;
+        draw.line(a - worldAxis, a + worldAxis, color);
         if (!j.enableLimit) return;
         // Angles are measured about A's axis from a direction u perpendicular to it; the spoke turns u by B's
         // rotation relative to its pose at creation, qB conj(reference), which is u turned by the hinge angle.

@@ -1,6 +1,7 @@
 #pragma once
 // Debug drawing: World::debugDraw describes what the world holds (shapes at their poses, boxes, contacts, sleeping
-// state, broad-phase cells, joints) through this small interface, which a viewer or a game implements with its own renderer.
+// state, broad-phase cells, joints) through this small interface, which a viewer or a game implements with its own
+// renderer.
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -69,7 +70,8 @@ struct DebugDrawOptions {
     std::uint32_t maxTriangles = 50000;
     /// Cap on broad-phase boxes (grid cells and tree nodes) per call, so a world of 100k bodies cannot stall a frame.
     std::uint32_t maxBroadphaseBoxes = 20000;
-    /// Levels of static BVH node boxes kDrawBroadphaseCells draws below the root (0: none; each level is up to 4x more).
+    /// Levels of static BVH node boxes kDrawBroadphaseCells draws below the root (0: none; each level is up to 4x
+    /// more).
     std::uint32_t broadphaseTreeDepth = 2;
     /// Cap on joints per call.
     std::uint32_t maxJoints = 20000;
