@@ -26,8 +26,7 @@ enum DebugDrawFlags : std::uint32_t {
     kDrawAabbs = 1u << 2,          ///< tight world bounding box of every body
     kDrawContacts = 1u << 3,       ///< the last step's contact points and their normals
     kDrawSleeping = 1u << 4,       ///< sleeping bodies take DebugDrawColors::asleep (needs shapes)
-    /// Colour bodies by island. Islands are not built yet: until they are, this flag draws nothing extra
-    /// (see islandOf in src/debug_draw.cpp, the hook the islands stage fills).
+    /// Colour moving bodies by the island the last step put them in (bodies added since keep their type's colour).
     kDrawIslands = 1u << 5,
     /// The broad phase of the last step, from the boxes it was given (swept by the step's motion, so cells lag the
     /// bodies' current poses by one step). When the multi-resolution grid found the moving pairs: every occupied
