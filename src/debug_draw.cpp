@@ -276,13 +276,16 @@ void World::debugDraw(DebugDraw& draw, const DebugDrawOptions& options) const {
     Drawer drawer{w, draw, options, options.maxTriangles, options.maxBroadphaseBoxes};
     const DebugDrawColors& colors = options.colors;
 
+    // Bodies are walked only for a layer that draws them: each costs a world bounds computation, which alone took
+    // several ms of a cells-only draw of 100k bodies.
+    const bool bodies = (options.flags & (kDrawShapes | kDrawAabbs)) != 0;
     const detail::StaticBodies& s = w.bodies.statics;
-    for (std::uint32_t i = 0; i < s.size(); ++i)
+    for (std::uint32_t i = 0; bodies && i < s.size(); ++i)
         drawer.body(w.shapes[s.shape[i]], {{s.px[i], s.py[i], s.pz[i]}, {s.qx[i], s.qy[i], s.qz[i], s.qw[i]}},
                     colors.staticBody);
 
     const detail::MovingBodies& m = w.bodies.moving;
-    for (std::uint32_t i = 0; i < m.size(); ++i) {
+    for (std::uint32_t i = 0; bodies && i < m.size(); ++i) {
         const std::uint8_t flags = m.flags[i];
         DebugColor color = (flags & detail::kFlagKinematic) ? colors.kinematicBody : colors.dynamicBody;
         if (options.flags & kDrawIslands)
