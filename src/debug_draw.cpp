@@ -1,5 +1,6 @@
 // Debug draw: the default line drawings of DebugDraw's solid calls, and World::debugDraw, which walks the bodies,
-// their shapes (compound children, hull edges, mesh and heightfield triangles) and the last step's contacts.
+// their shapes (compound children, hull edges, mesh and heightfield triangles), the last step's contacts and broad
+// phase, and the joints.
 #include "rubble/debug_draw.h"
 
 #include <algorithm>
@@ -7,6 +8,7 @@
 #include <numbers>
 #include <optional>
 
+#include "broadphase/multi_resolution_grid.h"
 #include "broadphase/static_bvh.h"
 #include "world_impl.h"
 
@@ -105,11 +107,27 @@ DebugColor islandColor(std::uint32_t island) {
             static_cast<std::uint8_t>(64 + (h >> 8) % 192), 255};
 }
 
+/// The pose of a body's origin (where BodyDef::position put it), which joint anchors are relative to; none for a
+/// stale handle.
+std::optional<Transform> poseOf(const World::Impl& w, BodyId id) {
+    const detail::BodySlot* slot = w.bodies.find(id);
+    if (slot == nullptr) return std::nullopt;
+    const std::uint32_t i = slot->dense;
+    if (slot->set == detail::BodySet::Static) {
+        const detail::StaticBodies& s = w.bodies.statics;
+        return Transform{{s.px[i], s.py[i], s.pz[i]}, {s.qx[i], s.qy[i], s.qz[i], s.qw[i]}};
+    }
+    const detail::MovingBodies& m = w.bodies.moving;
+    const Quat q = w.orientationOf(i);
+    return Transform{w.comOf(i) - rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]}), q};
+}
+
 struct Drawer {
     const World::Impl& w;
     DebugDraw& draw;
     const DebugDrawOptions& options;
     std::uint32_t trianglesLeft;
+    std::uint32_t boxesLeft;
 
     bool inRegion(Vec3 min, Vec3 max) const {
         if (!options.regionMin || !options.regionMax) return true;
@@ -172,6 +190,77 @@ struct Drawer {
         }
     }
 
+    /// Draws a broad-phase box unless it lies outside the region or the cap is spent; false once the cap is spent.
+    bool broadphaseBox(Vec3 min, Vec3 max, DebugColor color) {
+        if (boxesLeft == 0) return false;
+        if (inRegion(min, max)) {
+            draw.aabb(min, max, color);
+            --boxesLeft;
+        }
+        return true;
+    }
+
+    void gridCells() {
+        const auto& levels = options.colors.gridLevels;
+        w.broadPhase.grid().forEachCell([&](const detail::MultiResolutionGrid::CellBox& cell) {
+            const Vec3 min{static_cast<float>(cell.min[0]), static_cast<float>(cell.min[1]),
+                           static_cast<float>(cell.min[2])};
+            const Vec3 max{static_cast<float>(cell.max[0]), static_cast<float>(cell.max[1]),
+                           static_cast<float>(cell.max[2])};
+            return broadphaseBox(min, max, levels[static_cast<std::size_t>(cell.level) % levels.size()]);
+        });
+    }
+
+    /// The node boxes of the top `depth` levels below the root, breadth first, so that the cap cuts the deepest.
+    void treeNodes(const detail::StaticBvh::Tree& tree, std::uint32_t depth) {
+        using detail::StaticBvh;
+        if (tree.nodes.empty() || depth == 0) return;
+        std::vector<std::uint32_t> level{0}, next;
+        for (std::uint32_t d = 0; d < depth && !level.empty(); ++d) {
+            next.clear();
+            for (std::uint32_t node : level)
+                for (int k = 0; k < 4; ++k) {
+                    const std::uint32_t child = tree.nodes[node].child(k);
+                    // Primitives are bodies and triangles, which the shape and AABB layers draw.
+                    if (child == StaticBvh::kUnusedLane || (child & StaticBvh::kPrimitiveBit)) continue;
+                    const detail::Aabb box = tree.nodes[node].box(k);
+                    if (!(box.min.x <= box.max.x && box.min.y <= box.max.y && box.min.z <= box.max.z)) continue;
+                    if (!broadphaseBox(box.min, box.max, options.colors.staticBvhNode)) return;
+                    next.push_back(child);
+                }
+            std::swap(level, next);
+        }
+    }
+
+    void joint(const detail::Joint& j, const Transform& poseA, const Transform& poseB) {
+        const DebugDrawColors& c = options.colors;
+        const DebugColor color = j.type == JointType::Distance ? c.distanceJoint
+                                 : j.type == JointType::Spring ? c.springJoint
+                                 : j.type == JointType::Ball   ? c.ballJoint
+                                                               : c.hingeJoint;
+        const Vec3 a = apply(poseA, j.localAnchorA), b = apply(poseB, j.localAnchorB);
+        const Vec3 min{std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
+        const Vec3 max{std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
+        if (!inRegion(min, max)) return;
+        draw.point(a, options.pointSize, color);
+        draw.point(b, options.pointSize, color);
+        draw.line(a, b, color);
+        if (j.type != JointType::Hinge) return;
+        const float size = options.jointSize;
+        const Vec3 axis = j.localAxisA;  // unit, A's frame
+        const Vec3 worldAxis = rotate(poseA.rotation, axis) * size;
+        draw.line(a - worldAxis, a + worldAxis, color);
+        if (!j.enableLimit) return;
+        // Angles are measured about A's axis from a direction u perpendicular to it; the spoke turns u by B's
+        // rotation relative to its pose at creation, qB conj(reference), which is u turned by the hinge angle.
+        const Vec3 helper = std::fabs(axis.x) < 0.6f ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+        const Vec3 u = cross(cross(axis, helper), axis) * (1.0f / length(cross(axis, helper)));
+        const Vec3 v = cross(axis, u);
+        const Transform arcPose{a, poseA.rotation};
+        circle(draw, arcPose, {}, u, v, size, j.lowerAngle, j.upperAngle, color);
+        draw.line(a, a + rotate(poseB.rotation * conjugate(j.referenceRotation), u) * size, color);
+    }
+
     void body(const detail::Shape& s, const Transform& pose, DebugColor color) {
         const detail::Aabb bounds = detail::worldBounds(s, pose);
         if (!inRegion(bounds.min, bounds.max)) return;
@@ -184,16 +273,19 @@ struct Drawer {
 
 void World::debugDraw(DebugDraw& draw, const DebugDrawOptions& options) const {
     const Impl& w = *impl_;
-    Drawer drawer{w, draw, options, options.maxTriangles};
+    Drawer drawer{w, draw, options, options.maxTriangles, options.maxBroadphaseBoxes};
     const DebugDrawColors& colors = options.colors;
 
+    // Bodies are walked only for a layer that draws them: each costs a world bounds computation, which alone took
+    // several ms of a cells-only draw of 100k bodies.
+    const bool bodies = (options.flags & (kDrawShapes | kDrawAabbs)) != 0;
     const detail::StaticBodies& s = w.bodies.statics;
-    for (std::uint32_t i = 0; i < s.size(); ++i)
+    for (std::uint32_t i = 0; bodies && i < s.size(); ++i)
         drawer.body(w.shapes[s.shape[i]], {{s.px[i], s.py[i], s.pz[i]}, {s.qx[i], s.qy[i], s.qz[i], s.qw[i]}},
                     colors.staticBody);
 
     const detail::MovingBodies& m = w.bodies.moving;
-    for (std::uint32_t i = 0; i < m.size(); ++i) {
+    for (std::uint32_t i = 0; bodies && i < m.size(); ++i) {
         const std::uint8_t flags = m.flags[i];
         DebugColor color = (flags & detail::kFlagKinematic) ? colors.kinematicBody : colors.dynamicBody;
         if (options.flags & kDrawIslands)
@@ -203,6 +295,31 @@ void World::debugDraw(DebugDraw& draw, const DebugDrawOptions& options) const {
         const Quat q = w.orientationOf(i);
         const Vec3 origin = w.comOf(i) - rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]});
         drawer.body(w.shapes[m.shape[i]], {origin, q}, color);
+    }
+
+    if (options.flags & kDrawBroadphaseCells) {
+        // The profile names the algorithm that ran in the last step (Auto when no broad phase ran), so a grid kept
+        // from an earlier step is never drawn as if it were current.
+        if (w.profile.broadPhase == BroadPhaseKind::Grid) drawer.gridCells();
+        if (options.broadphaseTreeDepth > 0 && w.broadPhase.staticPrimitiveCount() > 0) {
+            // Through the queries' cache: it applies the static edits since the step and commits the tree once,
+            // under its lock, so drawing never races a query that would otherwise do the same.
+            const detail::QueryTrees& trees = impl_->queries.prepare(*impl_);
+            for (const detail::StaticBvh::Tree* tree : trees.statics)
+                if (tree != nullptr) drawer.treeNodes(*tree, options.broadphaseTreeDepth);
+        }
+    }
+
+    if (options.flags & kDrawJoints) {
+        std::uint32_t jointsLeft = options.maxJoints;
+        for (const detail::Joint& j : w.joints.joints()) {
+            if (jointsLeft == 0) break;
+            if (j.broken) continue;
+            const std::optional<Transform> poseA = poseOf(w, j.bodyA), poseB = poseOf(w, j.bodyB);
+            if (!poseA || !poseB) continue;
+            drawer.joint(j, *poseA, *poseB);
+            --jointsLeft;
+        }
     }
 
     if (options.flags & kDrawContacts) {

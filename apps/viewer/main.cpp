@@ -25,7 +25,8 @@ constexpr const char* kUsage =
     "  --screenshot FILE  headless: write the last frame as a PNG (needs --frames)\n"
     "  --overlay          headless: draw the overlay into the screenshot too (its numbers vary from run to run)\n"
     "  --autopilot        marble: the ball finds its way through the maze by itself\n"
-    "  --layers LIST      debug layers shown at the start, comma-separated: contacts, aabbs, islands, sleeping\n"
+    "  --layers LIST      debug layers shown at the start, comma-separated: contacts, aabbs, islands, sleeping,\n"
+    "                     cells (broad-phase grid cells and static tree), joints\n"
     "                     (default: sleeping)\n";
 
 [[noreturn]] void usageError(const std::string& message) {
@@ -89,8 +90,10 @@ rubble::viewer::ViewerOptions parseOptions(int argc, char** argv) {
             while (!rest.empty()) {
                 const std::size_t comma = rest.find(',');
                 const std::string_view name = rest.substr(0, comma);
-                if (name != "contacts" && name != "aabbs" && name != "islands" && name != "sleeping")
-                    usageError("--layers knows contacts, aabbs, islands and sleeping, not '" + std::string(name) + "'");
+                if (name != "contacts" && name != "aabbs" && name != "islands" && name != "sleeping" &&
+                    name != "cells" && name != "joints")
+                    usageError("--layers knows contacts, aabbs, islands, sleeping, cells and joints, not '" +
+                               std::string(name) + "'");
                 rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
             }
         } else if (!a.empty() && a[0] == '-')

@@ -54,6 +54,16 @@ void drawOverlay(const OverlayInfo& info, DebugLayers& layers) {
         ImGui::Checkbox("islands", &layers.islands);
         ImGui::SameLine();
         ImGui::Checkbox("sleeping", &layers.sleeping);
+        ImGui::Checkbox("broad-phase cells", &layers.cells);
+        if (layers.cells && info.frame != nullptr) {
+            // Sweep-and-prune has no cells: say so, or the empty layer looks broken.
+            ImGui::SameLine();
+            const BroadPhaseKind ran = info.frame->profile.broadPhase;
+            ImGui::TextUnformatted(ran == BroadPhaseKind::Grid            ? "(grid)"
+                                   : ran == BroadPhaseKind::SweepAndPrune ? "(sweep-and-prune: static tree only)"
+                                                                          : "(no broad phase ran)");
+        }
+        ImGui::Checkbox("joints", &layers.joints);
     }
     ImGui::Text("camera: %s", info.followCamera ? "follow" : "orbit");
     if (info.marble)

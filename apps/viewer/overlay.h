@@ -15,6 +15,8 @@ struct DebugLayers {
     bool aabbs = false;
     bool islands = false;
     bool sleeping = true;  ///< sleeping bodies tinted (and, with islands, drawn in the sleeping colour)
+    bool cells = false;    ///< the broad phase's grid cells (when the grid ran) and the static tree's top boxes
+    bool joints = false;
     friend bool operator==(const DebugLayers&, const DebugLayers&) = default;
 };
 

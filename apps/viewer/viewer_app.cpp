@@ -261,6 +261,8 @@ void Viewer::applyDebugLayers() {
     o.flags = 0;
     if (layers_.contacts) o.flags |= kDrawContacts;
     if (layers_.aabbs) o.flags |= kDrawAabbs;
+    if (layers_.cells) o.flags |= kDrawBroadphaseCells;
+    if (layers_.joints) o.flags |= kDrawJoints;
     if (layers_.islands) o.flags |= kDrawShapes | kDrawIslands | (layers_.sleeping ? kDrawSleeping : 0u);
     debugLines_.clear();
     if (o.flags == 0) {
@@ -509,7 +511,9 @@ int Viewer::run() {
         layers_ = {.contacts = l.find("contacts") != std::string::npos,
                    .aabbs = l.find("aabbs") != std::string::npos,
                    .islands = l.find("islands") != std::string::npos,
-                   .sleeping = l.find("sleeping") != std::string::npos};
+                   .sleeping = l.find("sleeping") != std::string::npos,
+                   .cells = l.find("cells") != std::string::npos,
+                   .joints = l.find("joints") != std::string::npos};
     }
     std::unique_ptr<OffscreenTarget> target;
     if (headless)

@@ -17,7 +17,8 @@ struct ViewerOptions {
     int threads = -1;   ///< worker threads (-1: the scene's setting)
     bool overlay = true;
     bool autopilot = false;  ///< marble: the ball follows the way through the maze by itself
-    /// Debug layers to start with: any of "contacts", "aabbs", "islands", "sleeping" (comma-separated).
+    /// Debug layers to start with: any of "contacts", "aabbs", "islands", "sleeping", "cells", "joints"
+    /// (comma-separated).
     std::string layers;
 };
 

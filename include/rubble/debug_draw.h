@@ -1,6 +1,8 @@
 #pragma once
 // Debug drawing: World::debugDraw describes what the world holds (shapes at their poses, boxes, contacts, sleeping
-// state) through this small interface, which a viewer or a game implements with its own renderer.
+// state, broad-phase cells, joints) through this small interface, which a viewer or a game implements with its own
+// renderer.
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -24,9 +26,19 @@ enum DebugDrawFlags : std::uint32_t {
     kDrawAabbs = 1u << 2,          ///< tight world bounding box of every body
     kDrawContacts = 1u << 3,       ///< the last step's contact points and their normals
     kDrawSleeping = 1u << 4,       ///< sleeping bodies take DebugDrawColors::asleep (needs shapes)
-    /// Colour bodies by island. Islands are not built yet: until they are, this flag draws nothing extra
-    /// (see islandOf in src/debug_draw.cpp, the hook the islands stage fills).
+    /// Colour moving bodies by the island the last step put them in (bodies added since keep their type's colour).
     kDrawIslands = 1u << 5,
+    /// The broad phase of the last step, from the boxes it was given (swept by the step's motion, so cells lag the
+    /// bodies' current poses by one step). When the multi-resolution grid found the moving pairs: every occupied
+    /// cell, coloured by level (DebugDrawColors::gridLevels). Sweep-and-prune has no cells (it sorts boxes along an
+    /// axis; the kDrawAabbs boxes are its whole input), so nothing is drawn for the moving bodies then, and
+    /// Profile::broadPhase says which ran. In both cases the static BVH's top node boxes, down to
+    /// DebugDrawOptions::broadphaseTreeDepth levels below the root.
+    kDrawBroadphaseCells = 1u << 6,
+    /// Each unbroken joint: its two world anchors (points) and the line between them, coloured by joint type; a
+    /// hinge adds its axis through anchor A and, with its limit on, the limit arc about the axis and a spoke at the
+    /// current hinge angle.
+    kDrawJoints = 1u << 7,
     kDrawDefault = kDrawShapes | kDrawMeshTriangles | kDrawContacts | kDrawSleeping,
 };
 
@@ -39,14 +51,30 @@ struct DebugDrawColors {
     DebugColor aabb{60, 220, 90};
     DebugColor contactPoint{255, 255, 0};
     DebugColor contactNormal{255, 60, 60};
+    /// Grid cells by level, finest first, repeating past the last entry.
+    std::array<DebugColor, 4> gridLevels{{{80, 200, 255}, {120, 255, 140}, {255, 220, 80}, {255, 110, 200}}};
+    DebugColor staticBvhNode{200, 200, 255};
+    DebugColor distanceJoint{255, 255, 255};
+    DebugColor springJoint{60, 255, 200};
+    DebugColor ballJoint{255, 140, 40};
+    DebugColor hingeJoint{255, 80, 255};
 };
 
 struct DebugDrawOptions {
     std::uint32_t flags = kDrawDefault;
-    /// When set, only bodies whose bounds overlap this box, and only triangles whose bounds overlap it, are drawn.
+    /// When set, only bodies, triangles, broad-phase boxes and joints (the box of their two anchors) whose bounds
+    /// overlap this box are drawn.
     std::optional<Vec3> regionMin, regionMax;
     /// Cap on mesh and heightfield triangles per call (big terrains are drawn partly rather than stall a frame).
     std::uint32_t maxTriangles = 50000;
+    /// Cap on broad-phase boxes (grid cells and tree nodes) per call, so a world of 100k bodies cannot stall a frame.
+    std::uint32_t maxBroadphaseBoxes = 20000;
+    /// Levels of static BVH node boxes kDrawBroadphaseCells draws below the root (0: none; each level is up to 4x
+    /// more).
+    std::uint32_t broadphaseTreeDepth = 2;
+    /// Cap on joints per call.
+    std::uint32_t maxJoints = 20000;
+    float jointSize = 0.3f;      ///< m, half length of a hinge's axis line and radius of its limit arc
     float normalLength = 0.25f;  ///< m, contact normals
     float pointSize = 0.05f;     ///< m, contact points
     DebugDrawColors colors;

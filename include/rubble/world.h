@@ -187,7 +187,8 @@ public:
     // Debug draw (include/rubble/debug_draw.h, src/debug_draw.cpp)
 
     /// Draws what `options` selects (shapes at their bodies' poses, AABBs, last step's contact points and normals,
-    /// sleeping state) into `draw`. Const: may run between steps on any one thread.
+    /// sleeping state, last step's broad-phase cells, joints) into `draw`. Const: may run between steps on any one
+    /// thread.
     void debugDraw(DebugDraw& draw, const DebugDrawOptions& options) const;
 
     struct Impl;

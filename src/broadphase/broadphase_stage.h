@@ -47,6 +47,9 @@ public:
 
     /// The algorithm the last call used for moving-moving pairs.
     BroadPhaseKind lastKind() const { return lastKind_; }
+    /// The grid as the last step that ran it left it (read-only, for debug drawing; lastKind() says whether that
+    /// was the last step).
+    const MultiResolutionGrid& grid() const { return *grid_; }
     std::uint32_t staticPrimitiveCount() const;
     /// The static BVH with the static edits made since the last step applied and committed, for the scene queries
     /// (src/query/), which then only read it. Not thread-safe: the queries call it under their own lock.

@@ -525,6 +525,10 @@ void MultiResolutionGrid::findPairs(const Bounds& bounds, const PairFilter& filt
         layout.keyBits = static_cast<std::uint32_t>(3 * layout.axisBits + levelBits);
     }
 
+    cellAxisBits_ = layout.axisBits;
+    cellIndexBits_ = layout.indexBits;
+    validCount_ = validCount;
+
     // 2-4. Keys, sort, gather, rows. Equal keys keep index order (the sort is stable), so slots are deterministic.
     computeKeys(bounds, layout, pool);
     radixSortBits(items_.data(), n, layout.indexBits, static_cast<int>(layout.keyBits) + (outliers > 0 ? 1 : 0),

@@ -24,6 +24,7 @@
 // Every candidate is decided by the exact overlaps() predicate, so the grid only ever costs time, never pairs.
 // Work is split in chunks whose bounds depend only on counts, and chunk outputs are concatenated in chunk order,
 // so the result does not depend on the thread count.
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -57,6 +58,38 @@ public:
     std::uint32_t maxBodiesPerCell() const { return maxBodiesPerCell_; }
     /// Cell size of the i-th occupied level (finest first), i < levelCount().
     float levelCellSize(int i) const { return static_cast<float>(levelSize_[occupiedLevels_[i]]); }
+
+    /// One occupied cell of the last findPairs, for debug drawing. `level` counts from the finest level of that
+    /// step's set-up (levels that held no body included), so one level keeps its number while bodies come and go.
+    struct CellBox {
+        int level = 0;
+        double min[3] = {0, 0, 0};
+        double max[3] = {0, 0, 0};
+    };
+    /// Calls visit(const CellBox&) for every cell that held a body in the last findPairs, in key order (level, then
+    /// z, y, x), until visit returns false. A cell is the region of centres binned into it, so it spans one binning
+    /// cell (the level's size times 1 + 1e-6); the far-edge cell of a world wider than 2^20 finest cells also holds
+    /// the clamped centres beyond it. Reads what the step left: no work is added to the step.
+    template <class Visit>
+    void forEachCell(Visit&& visit) const {
+        const std::uint32_t valid = std::min<std::uint32_t>(validCount_, static_cast<std::uint32_t>(items_.size()));
+        const std::uint32_t maxCoord = (1u << cellAxisBits_) - 1;
+        for (std::uint32_t s = 0; s < valid; ++s) {
+            const std::uint64_t key = items_[s] >> cellIndexBits_;
+            if (s > 0 && key == (items_[s - 1] >> cellIndexBits_)) continue;
+            const std::uint32_t coord[3] = {static_cast<std::uint32_t>(key) & maxCoord,
+                                            static_cast<std::uint32_t>(key >> cellAxisBits_) & maxCoord,
+                                            static_cast<std::uint32_t>(key >> (2 * cellAxisBits_)) & maxCoord};
+            CellBox cell;
+            cell.level = static_cast<int>(key >> (3 * cellAxisBits_));
+            const double size = 1.0 / levelInvBin_[cell.level];
+            for (int a = 0; a < 3; ++a) {
+                cell.min[a] = origin_[a] + coord[a] * size;
+                cell.max[a] = origin_[a] + (coord[a] + 1.0) * size;
+            }
+            if (!visit(static_cast<const CellBox&>(cell))) return;
+        }
+    }
 
 private:
     /// What one chunk of bodies contributes to the level set-up (finite boxes only).
@@ -119,6 +152,10 @@ private:
     std::uint32_t rowCount_ = 0;
     std::uint32_t cellCount_ = 0;
     std::uint32_t maxBodiesPerCell_ = 0;
+    // How the last findPairs packed cell keys, kept for forEachCell.
+    int cellAxisBits_ = 0;
+    int cellIndexBits_ = 0;
+    std::uint32_t validCount_ = 0;
 };
 
 }  // namespace rubble::detail
