@@ -302,6 +302,12 @@ int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices
         const Vec3 edge = v[e == 2 ? 0 : e + 1] - v[e], side = cross(edge, faceN);  // outward, |side| = |edge|
         const float f0 = dot(side, s0 - v[e]), f1 = dot(side, s0 + axis - v[e]);
         if (f0 > 0 && f1 > 0 && beyondReach(f0, f1, reach, dot(edge, edge))) return 0;
+        // Segment x edge: the whole segment projects to one point, the triangle to [min(0, w), max(0, w)] (w: the
+        // opposite vertex; the edge's own two project to 0).
+        const Vec3 across = cross(axis, edge);
+        const float w = dot(across, v[e == 0 ? 2 : e - 1] - v[e]), at = dot(across, s0 - v[e]);
+        const float gap = at > 0 ? at - std::max(w, 0.0f) : std::min(w, 0.0f) - at;
+        if (gap > 0 && beyondReach(gap, gap, reach, dot(across, across))) return 0;
     }
 
     // Closest pair: both ends against the triangle, the segment against the edges, the segment through the face.
@@ -393,17 +399,22 @@ int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices
 
 // ---- Box --------------------------------------------------------------------------------------------------------
 
+Mat3 rotationMatrix(Quat q) {
+    const float xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
+    const float xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
+    const float wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
+    Mat3 m;
+    m.rows[0] = {1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)};
+    m.rows[1] = {2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)};
+    m.rows[2] = {2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)};
+    return m;
+}
+
 TriangleBox triangleBox(const Transform& pose, Vec3 halfExtents) {
     TriangleBox box;
     box.pose = pose;
     box.halfExtents = halfExtents;
-    const Quat q = pose.rotation;
-    const float xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
-    const float xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
-    const float wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
-    box.toWorld.rows[0] = {1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)};
-    box.toWorld.rows[1] = {2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)};
-    box.toWorld.rows[2] = {2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)};
+    box.toWorld = rotationMatrix(pose.rotation);
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c) box.toBox(r, c) = box.toWorld(c, r);
     return box;

@@ -108,6 +108,8 @@ struct TriangleBox {
     Vec3 halfExtents;
 };
 TriangleBox triangleBox(const Transform& pose, Vec3 halfExtents);
+/// The rotation of a unit quaternion as a matrix (columns: the rotated axes).
+Mat3 rotationMatrix(Quat q);
 /// The same kernel for a box made by triangleBox.
 int collideBoxTriangle(const TriangleBox& box, const TriangleVertices& tri, std::uint8_t activeEdges, float margin,
                        Manifold& out);
