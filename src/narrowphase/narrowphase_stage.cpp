@@ -566,9 +566,24 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             auto mesh = std::upper_bound(candidates.meshes.begin(), candidates.meshes.end(), first,
                                          [](std::uint32_t t, const MeshPair& m) { return t < m.firstTriangle; }) -
                         1;
-            for (auto t = first; t < end - movingCount - staticCount; ++t) {
-                while (t >= mesh->firstTriangle + mesh->triangleCount) ++mesh;
+            const auto last = static_cast<std::uint32_t>(end - movingCount - staticCount);
+            for (auto t = first; t < last; ++mesh) {
+                const std::uint32_t runEnd = std::min(last, mesh->firstTriangle + mesh->triangleCount);
+                if (t >= runEnd) continue;
+                // The body's job for its first triangle here stands for the rest of its run (a compound body makes
+                // one job per child and triangle, in that order, so it goes through addJob for every triangle).
+                const std::size_t at = chunk.jobs.size();
                 addJob(mesh->moving, false, mesh->staticBody, true, candidates.meshTriangles[t]);
+                if (chunk.jobs.size() != at + 1 || chunk.jobs[at].pair.childA != kNoChild) {
+                    for (++t; t < runEnd; ++t)
+                        addJob(mesh->moving, false, mesh->staticBody, true, candidates.meshTriangles[t]);
+                    continue;
+                }
+                Job job = chunk.jobs[at];
+                for (++t; t < runEnd; ++t) {
+                    job.pair.triangle = candidates.meshTriangles[t];
+                    chunk.jobs.push_back(job);
+                }
             }
         }
         runChunk(chunk, *scratch_[static_cast<std::size_t>(worker)], storage, shapes, params);
