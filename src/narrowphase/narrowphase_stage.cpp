@@ -389,7 +389,7 @@ void collideBatched(Batched kernel, const std::vector<std::uint32_t>& list, Narr
                     {in[kPx],     in[kPy],     in[kPz],     in[kQx],     in[kQy],     in[kQz],     in[kQw],
                      in[kSx],     in[kSy],     in[kSz],     in[b + kPx], in[b + kPy], in[b + kPz], in[b + kQx],
                      in[b + kQy], in[b + kQz], in[b + kQw], in[b + kSx], in[b + kSy], in[b + kSz], margin},
-                    n, chunk.manifolds.data(), jobs);
+                    n, chunk.manifolds.data(), jobs, /*padded=*/true);
                 continue;
             case Batched::SphereSphere:
                 collideSpheresBatch(
