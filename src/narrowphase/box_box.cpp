@@ -412,30 +412,84 @@ void storeFace(const FaceSlots<F>& f, FaceLanes<simd::lanesOf<F>>& out) {
     simd::store(out.incidentFace, f.incidentFace);
 }
 
-/// Lane k of a face contact into a manifold: the chosen slots moved from the reference frame to the world (onto B's
-/// surface when B's face is the reference).
+/// The chosen points of the face contacts, moved from the reference frame to the world (onto B's surface when B's
+/// face is the reference), and the normals, in lanes: the slots' values are gathered from the stored FaceLanes.
+template <class F>
+struct FacePoints {
+    F x[4], y[4], z[4], depth[4], slot[4];
+    F nx, ny, nz;
+};
+
+template <class F>
+void facePoints(const FaceLanes<simd::lanesOf<F>>& f, const BoxSat<F>& sat, const Vec3W<F>& posA, const Vec3W<F>& posB,
+                FacePoints<F>& out) {
+    using simd::select;
+    using I = simd::IntOf<F>;
+    const F zero(0.0f), one(1.0f), two(2.0f);
+    const auto useB = sat.useB;
+    const F axis = simd::load<F>(f.axis), s = simd::load<F>(f.s);
+    const F ku = select(axis == two, zero, axis + one);
+    F R[3][3];
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) R[r][c] = select(useB, sat.rb[r][c], sat.ra[r][c]);
+    const F nl[3] = {select(axis == zero, s, zero), select(axis == one, s, zero), select(axis == two, s, zero)};
+    F n[3];
+    for (int r = 0; r < 3; ++r) {
+        n[r] = R[r][0] * nl[0] + R[r][1] * nl[1] + R[r][2] * nl[2];
+        n[r] = select(useB, -n[r], n[r]);
+    }
+    out.nx = n[0], out.ny = n[1], out.nz = n[2];
+    const F origin[3] = {select(useB, posB.x, posA.x), select(useB, posB.y, posA.y), select(useB, posB.z, posA.z)};
+    const I lanes(static_cast<std::int32_t>(simd::lanesOf<F>));
+    const I lane = simd::toInt(simd::laneIndices<F>());
+    for (int o = 0; o < 4; ++o) {
+        const F slot = simd::load<F>(f.chosen[o]);
+        const I index = simd::toInt(slot) * lanes + lane;
+        const F u = simd::gather(&f.u[0][0], index), v = simd::gather(&f.v[0][0], index);
+        const F depth = simd::gather(&f.depth[0][0], index);
+        F w = simd::gather(&f.w[0][0], index);
+        w = select(useB, w + s * depth, w);  // onto B's reference face (B's surface)
+        F p[3];
+        for (int c = 0; c < 3; ++c) {
+            const F cf(static_cast<float>(c));
+            p[c] = select(axis == cf, w, select(ku == cf, u, v));
+        }
+        out.x[o] = origin[0] + (R[0][0] * p[0] + R[0][1] * p[1] + R[0][2] * p[2]);
+        out.y[o] = origin[1] + (R[1][0] * p[0] + R[1][1] * p[1] + R[1][2] * p[2]);
+        out.z[o] = origin[2] + (R[2][0] * p[0] + R[2][1] * p[1] + R[2][2] * p[2]);
+        out.depth[o] = depth, out.slot[o] = slot;
+    }
+}
+
+/// FacePoints stored lane by lane.
 template <std::size_t L>
-bool emitFace(const FaceLanes<L>& f, std::size_t k, const float ra[3][3], const float rb[3][3], bool useB, Vec3 posA,
-              Vec3 posB, Manifold& out) {
+struct FacePointLanes {
+    float x[4][L], y[4][L], z[4][L], depth[4][L], slot[4][L];
+    float nx[L], ny[L], nz[L];
+};
+
+template <class F>
+void storePoints(const FacePoints<F>& p, FacePointLanes<simd::lanesOf<F>>& out) {
+    for (int o = 0; o < 4; ++o) {
+        simd::store(out.x[o], p.x[o]), simd::store(out.y[o], p.y[o]), simd::store(out.z[o], p.z[o]);
+        simd::store(out.depth[o], p.depth[o]), simd::store(out.slot[o], p.slot[o]);
+    }
+    simd::store(out.nx, p.nx), simd::store(out.ny, p.ny), simd::store(out.nz, p.nz);
+}
+
+/// Lane k of the face contacts into a manifold.
+template <std::size_t L>
+bool emitFace(const FaceLanes<L>& f, const FacePointLanes<L>& p, std::size_t k, bool useB, Manifold& out) {
     const int axis = static_cast<int>(f.axis[k]);
-    const int ku = axis == 2 ? 0 : axis + 1, kv = axis == 0 ? 2 : axis - 1;
-    const float s = f.s[k];
     const int count = std::min(static_cast<int>(f.count[k]), 4);
-    float nl[3] = {0, 0, 0};
-    nl[axis] = s;
-    const std::uint32_t refFace = 2u * static_cast<std::uint32_t>(axis) + (s < 0 ? 1u : 0u);
+    const std::uint32_t refFace = 2u * static_cast<std::uint32_t>(axis) + (f.s[k] < 0 ? 1u : 0u);
     const std::uint32_t base = ((useB ? kBoxFeatureFaceB : kBoxFeatureFaceA) << kBoxFeatureKindShift) |
                                (refFace << 16) | (static_cast<std::uint32_t>(f.incidentFace[k]) << 8);
-    out.normal = useB ? -mul(rb, nl) : mul(ra, nl);
+    out.normal = {p.nx[k], p.ny[k], p.nz[k]};
     for (int o = 0; o < count; ++o) {
-        const int slot = static_cast<int>(f.chosen[o][k]);
-        const float depth = f.depth[slot][k];
-        float p[3];
-        p[ku] = f.u[slot][k], p[kv] = f.v[slot][k], p[axis] = f.w[slot][k];
-        if (useB) p[axis] += s * depth;  // onto B's reference face (B's surface)
-        out.points[o].position = useB ? posB + mul(rb, p) : posA + mul(ra, p);
-        out.points[o].depth = depth;
-        out.points[o].feature = base | slotId(slot);
+        out.points[o].position = {p.x[o][k], p.y[o][k], p.z[o][k]};
+        out.points[o].depth = p.depth[o][k];
+        out.points[o].feature = base | slotId(static_cast<int>(p.slot[o][k]));
     }
     out.pointCount = count;
     return count > 0;
@@ -515,7 +569,11 @@ bool finishOne(const BoxSat<float>& sat, Vec3 posA, Vec3 halfA, Vec3 posB, Vec3 
     faceSlots<float>(sat, wide1(halfA), wide1(halfB), margin, face);
     FaceLanes<1> stored;
     storeFace(face, stored);
-    return emitFace(stored, 0, sat.ra, sat.rb, sat.useB, posA, posB, out);
+    FacePoints<float> points;
+    facePoints<float>(stored, sat, wide1(posA), wide1(posB), points);
+    FacePointLanes<1> storedPoints;
+    storePoints(points, storedPoints);
+    return emitFace(stored, storedPoints, 0, sat.useB, out);
 }
 
 /// Pair i of a batch, one lane.
@@ -546,15 +604,21 @@ void collideWideAt(const BoxPairs& in, std::size_t i, std::size_t lanes, Manifol
     alignas(64) float values[kValues][simd::kLanes];
     bool separated[simd::kLanes], useB[simd::kLanes], useEdge[simd::kLanes];
     int f = 0;
-    forEachValue(sat, [&](FloatW& v) { simd::store(values[f++], v); });
+    if (simd::any(simd::andMask(sat.useEdge, simd::notMask(sat.separated))))  // only edge-edge pairs read them back
+        forEachValue(sat, [&](FloatW& v) { simd::store(values[f++], v); });
     simd::storeMask(separated, sat.separated);
     simd::storeMask(useB, sat.useB);
     simd::storeMask(useEdge, sat.useEdge);
     alignas(64) FaceLanes<simd::kLanes> face;
+    alignas(64) FacePointLanes<simd::kLanes> points;
     if (simd::any(simd::notMask(simd::orMask(sat.separated, sat.useEdge)))) {
         FaceSlots<FloatW> slots;
         faceSlots<FloatW>(sat, halfA, halfB, margin, slots);
         storeFace(slots, face);
+        FacePoints<FloatW> wide;
+        facePoints<FloatW>(face, sat, Vec3W<FloatW>::load(in.ax, in.ay, in.az, i),
+                           Vec3W<FloatW>::load(in.bx, in.by, in.bz, i), wide);
+        storePoints(wide, points);
     }
     for (std::size_t k = 0; k < lanes; ++k) {
         const std::size_t p = i + k;
@@ -563,17 +627,18 @@ void collideWideAt(const BoxPairs& in, std::size_t i, std::size_t lanes, Manifol
             m.pointCount = 0;
             continue;
         }
+        if (!useEdge[k]) {
+            emitFace(face, points, k, useB[k], m);
+            continue;
+        }
         BoxSat<float> one;
         f = 0;
         forEachValue(one, [&](float& v) { v = values[f++][k]; });
         one.separated = false;
         one.useB = useB[k];
-        one.useEdge = useEdge[k];
-        const Vec3 pa{in.ax[p], in.ay[p], in.az[p]}, pb{in.bx[p], in.by[p], in.bz[p]};
-        if (useEdge[k])
-            finishEdge(one, pa, {in.ahx[p], in.ahy[p], in.ahz[p]}, {in.bhx[p], in.bhy[p], in.bhz[p]}, in.margin[p], m);
-        else
-            emitFace(face, k, one.ra, one.rb, useB[k], pa, pb, m);
+        one.useEdge = true;
+        finishEdge(one, {in.ax[p], in.ay[p], in.az[p]}, {in.ahx[p], in.ahy[p], in.ahz[p]},
+                   {in.bhx[p], in.bhy[p], in.bhz[p]}, in.margin[p], m);
     }
 }
 
