@@ -442,7 +442,12 @@ void facePoints(const FaceLanes<simd::lanesOf<F>>& f, const BoxSat<F>& sat, cons
     const F origin[3] = {select(useB, posB.x, posA.x), select(useB, posB.y, posA.y), select(useB, posB.z, posA.z)};
     const I lanes(static_cast<std::int32_t>(simd::lanesOf<F>));
     const I lane = simd::toInt(simd::laneIndices<F>());
+    const F count = simd::load<F>(f.count);
     for (int o = 0; o < 4; ++o) {
+        if (simd::none(count > F(static_cast<float>(o)))) {  // no lane has an o-th point (or any later one)
+            for (; o < 4; ++o) out.x[o] = out.y[o] = out.z[o] = out.depth[o] = out.slot[o] = zero;
+            break;
+        }
         const F slot = simd::load<F>(f.chosen[o]);
         const I index = simd::toInt(slot) * lanes + lane;
         const F u = simd::gather(&f.u[0][0], index), v = simd::gather(&f.v[0][0], index);
