@@ -22,131 +22,6 @@ inline float minf(float x, float y) { return x < y ? x : y; }
 inline float maxf(float x, float y) { return x > y ? x : y; }
 inline float signOf(float v) { return v < 0 ? -1.0f : 1.0f; }
 
-/// Room for a clipped polygon. A convex quadrilateral gains at most one vertex per side plane (8 in all); the
-/// spare room and the guard below only matter for nearly degenerate polygons whose rounding breaks convexity.
-constexpr int kClipCapacity = 12;
-
-/// A polygon being clipped, in the reference frame, one array per coordinate.
-struct ClipPolygon {
-    float p[3][kClipCapacity];
-    std::uint8_t id[kClipCapacity];     ///< point part of the feature id (bits 0-7)
-    std::uint8_t label[kClipCapacity];  ///< segment label of the edge from this point to the next (0..3 incident,
-                                        ///< 4..7 side plane)
-    int n = 0;
-};
-
-/// Sutherland-Hodgman step: keeps the part of polygon `in` with sg * p[k] <= h, given dist[e] = sg * p[k][e] - h.
-/// A new point gets the id (segment label, plane); the new edge along the plane gets label 4 + plane. (Branches beat
-/// a branch-free form that writes every point and crossing and computes every division: 7% on S1's box pairs.)
-[[gnu::always_inline]] inline void clipSide(const ClipPolygon& in, const float* dist, ClipPolygon& out, int k, float sg,
-                                            float h, int plane) {
-    int m = 0;
-    for (int e = 0; e < in.n && m + 2 <= kClipCapacity; ++e) {
-        const int f = e + 1 == in.n ? 0 : e + 1;
-        const float dc = dist[e], dd = dist[f];
-        const bool cIn = dc <= 0, dIn = dd <= 0;
-        if (cIn) {
-            for (int q = 0; q < 3; ++q) out.p[q][m] = in.p[q][e];
-            out.id[m] = in.id[e];
-            out.label[m] = in.label[e];
-            ++m;
-        }
-        if (cIn != dIn) {
-            // dc and dd have opposite signs (one may be zero only when cIn), so the division is safe.
-            const float s = dc / (dc - dd);
-            for (int q = 0; q < 3; ++q) out.p[q][m] = in.p[q][e] + s * (in.p[q][f] - in.p[q][e]);
-            out.p[k][m] = sg * h;  // exactly on the plane
-            out.id[m] = static_cast<std::uint8_t>(0x20 | (in.label[e] << 2) | plane);
-            out.label[m] = cIn ? static_cast<std::uint8_t>(4 + plane) : in.label[e];
-            ++m;
-        }
-    }
-    out.n = m;
-}
-
-/// Face contact in the reference frame. r: incident box axes (columns) in the reference frame, t: incident centre,
-/// hr/hi: half extents, axis/s: reference face normal s * e_axis. Writes up to 4 points (position in the
-/// reference frame on the incident face, depth, point id) and returns the count.
-int clipFace(const float r[3][3], const float t[3], const float hr[3], const float hi[3], int axis, float s,
-             float margin, float outP[4][3], float outDepth[4], std::uint8_t outId[4], int& incidentFace) {
-    // Incident face: the face of the other box most anti-parallel to the reference normal.
-    const float a0 = std::fabs(r[axis][0]), a1 = std::fabs(r[axis][1]), a2 = std::fabs(r[axis][2]);
-    const int j = (a0 >= a1 && a0 >= a2) ? 0 : (a1 >= a2 ? 1 : 2);
-    const float sj = s * r[axis][j] > 0 ? -1.0f : 1.0f;  // incident face normal = sj * B_j
-    incidentFace = 2 * j + (sj < 0 ? 1 : 0);
-    const int j1 = j == 2 ? 0 : j + 1, j2 = j == 0 ? 2 : j - 1;
-    float c[3], u[3], v[3];
-    for (int q = 0; q < 3; ++q) {
-        c[q] = t[q] + sj * hi[j] * r[q][j];
-        u[q] = hi[j1] * r[q][j1];
-        v[q] = hi[j2] * r[q][j2];
-    }
-    ClipPolygon bufA, bufB;
-    static constexpr float kSu[4] = {1, -1, -1, 1}, kSv[4] = {1, 1, -1, -1};
-    for (int k = 0; k < 4; ++k) {
-        for (int q = 0; q < 3; ++q) bufA.p[q][k] = c[q] + kSu[k] * u[q] + kSv[k] * v[q];
-        bufA.id[k] = static_cast<std::uint8_t>(k);
-        bufA.label[k] = static_cast<std::uint8_t>(k);
-    }
-    bufA.n = 4;
-    const int ku = axis == 2 ? 0 : axis + 1, kv = axis == 0 ? 2 : axis - 1;
-    // A side plane that every point is inside would hand the polygon on unchanged: such passes are skipped (in a
-    // resting stack most are), the others clip into the spare buffer.
-    ClipPolygon* cur = &bufA;
-    ClipPolygon* spare = &bufB;
-    auto clip = [&](int k, float sg, float h, int plane) {
-        float dist[kClipCapacity];
-        bool inside = true;
-        for (int e = 0; e < cur->n; ++e) {
-            dist[e] = sg * cur->p[k][e] - h;
-            inside &= dist[e] <= 0;
-        }
-        if (inside) return;
-        clipSide(*cur, dist, *spare, k, sg, h, plane);
-        ClipPolygon* emptied = cur;
-        cur = spare;
-        spare = emptied;
-    };
-    clip(ku, 1.0f, hr[ku], 0);
-    clip(ku, -1.0f, hr[ku], 1);
-    clip(kv, 1.0f, hr[kv], 2);
-    clip(kv, -1.0f, hr[kv], 3);
-    const int n = cur->n;
-    const auto& poly = cur->p;
-
-    // Keep points below the reference face plus margin.
-    float depth[kClipCapacity];
-    int keep[kClipCapacity];
-    int m = 0;
-    for (int k = 0; k < n; ++k) {
-        const float d = hr[axis] - s * poly[axis][k];
-        if (d >= -margin) {
-            depth[m] = d;
-            keep[m++] = k;
-        }
-    }
-
-    int chosen[4];
-    int count;
-    if (m <= 4) {
-        for (int k = 0; k < m; ++k) chosen[k] = k;
-        count = m;
-    } else {
-        // The box frame's coordinates (ku, kv) are the contact plane's: no projection needed (copying the points
-        // out for reduceContactPoints made box-box 9% slower).
-        chooseFourPoints(
-            m, depth, [&](int k) { return poly[ku][keep[k]]; }, [&](int k) { return poly[kv][keep[k]]; }, chosen);
-        count = 4;
-    }
-    for (int k = 0; k < count; ++k) {
-        const int point = keep[chosen[k]];
-        for (int q = 0; q < 3; ++q) outP[k][q] = poly[q][point];
-        outDepth[k] = depth[chosen[k]];
-        outId[k] = cur->id[point];
-    }
-    return count;
-}
-
 /// What the separating-axis test of a pair leaves for its clipping: both rotation matrices, B in A's frame, and
 /// the winning axes. Axis indices are held as floats so that every field is a lane of the same type.
 template <class F>
@@ -283,20 +158,356 @@ Vec3 mul(const float m[3][3], const float v[3]) {
             m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2]};
 }
 
-/// The contact of one pair that no axis separates (lane s of the test): a single edge-edge point or the clipped
-/// reference face.
-bool finishBoxes(const BoxSat<float>& sat, Vec3 posA, Vec3 halfA, Vec3 posB, Vec3 halfB, float margin, Manifold& out) {
+/// Candidate points of a face contact: the clipped incident face is the part of a parallelogram (the incident box
+/// face) inside a rectangle (the reference face's side planes), so its vertices are among a fixed set of slots:
+/// the 4 incident vertices, the 16 crossings of an incident edge with a side plane and the 4 reference-face corners,
+/// each valid where it lies inside every side plane (and, for a corner, inside the incident face). Fixed slots need
+/// no compaction, so 16 pairs are clipped at once in SIMD lanes; the slot order is the order of the points, and the
+/// ids are those Sutherland-Hodgman clipping would give them (box_box.h).
+constexpr int kFaceSlots = 24;
+constexpr int kCrossingSlot = 4;  ///< slot of incident edge e crossing side plane p: 4 + 4 e + p
+constexpr int kCornerSlot = 20;   ///< slot of the corner of side planes p1 (0, 1) and p2 (2, 3): 20 + 2 p1 + p2 - 2
+
+/// Point part of the feature id of a slot (bits 0-7).
+std::uint8_t slotId(int slot) {
+    if (slot < kCrossingSlot) return static_cast<std::uint8_t>(slot);
+    if (slot < kCornerSlot)
+        return static_cast<std::uint8_t>(0x20 | ((slot - kCrossingSlot) / 4) << 2 | (slot - kCrossingSlot) % 4);
+    const int p1 = (slot - kCornerSlot) / 2, p2 = 2 + (slot - kCornerSlot) % 2;
+    return static_cast<std::uint8_t>(0x20 | (4 + p1) << 2 | p2);
+}
+
+/// The face contact of every lane, in reference-frame coordinates permuted so that the reference normal axis is w:
+/// (u, v, w) = (x[ku], x[kv], x[axis]) with ku, kv the axes after `axis` in cyclic order.
+template <class F>
+struct FaceSlots {
+    F u[kFaceSlots], v[kFaceSlots], w[kFaceSlots], depth[kFaceSlots];
+    MaskOf<F> valid[kFaceSlots];
+    F chosen[4];  ///< the slots of the points, in increasing order (count of them are used)
+    F count;      ///< valid slots, at most 4 used
+    F axis, s;    ///< reference axis (0, 1, 2 as a float) and the sign of its face normal
+    F incidentFace;
+};
+
+/// v[i] for a per-lane index i in 0..2 (held as a float).
+template <class F>
+F pick(const F& v0, const F& v1, const F& v2, const F& i) {
+    return simd::select(i == F(0.0f), v0, simd::select(i == F(1.0f), v1, v2));
+}
+
+/// The face contacts of the lanes (those whose SAT chose a face axis; other lanes compute unused values). In the
+/// reference box's frame: A's when !useB, else B's (A seen from B: transpose of r, centre -r^T t).
+template <class F>
+[[gnu::flatten]] void faceSlots(const BoxSat<F>& sat, const Vec3W<F>& halfA, const Vec3W<F>& halfB, const F& margin,
+                                FaceSlots<F>& out) {
+    using simd::abs;
+    using simd::select;
+    const F zero(0.0f), one(1.0f);
+    const auto useB = sat.useB;
+    F m[3][3], c[3];  // incident axes (columns) and centre in the reference frame
+    for (int i = 0; i < 3; ++i) {
+        const F tt = -(sat.t[0] * sat.r[0][i] + sat.t[1] * sat.r[1][i] + sat.t[2] * sat.r[2][i]);
+        c[i] = select(useB, tt, sat.t[i]);
+        for (int j = 0; j < 3; ++j) m[i][j] = select(useB, sat.r[j][i], sat.r[i][j]);
+    }
+    const F hr[3] = {select(useB, halfB.x, halfA.x), select(useB, halfB.y, halfA.y), select(useB, halfB.z, halfA.z)};
+    const F hi[3] = {select(useB, halfA.x, halfB.x), select(useB, halfA.y, halfB.y), select(useB, halfA.z, halfB.z)};
+    const F axis = select(useB, sat.axisB, sat.axisA);
+    const F ku = select(axis == F(2.0f), zero, axis + one), kv = select(axis == zero, F(2.0f), axis - one);
+    const F cw = pick(c[0], c[1], c[2], axis);
+    // Sign of the reference normal: towards the incident box (A's face: sign of t; B's face: towards A, -tb).
+    const F s = select(select(useB, -sat.tbBest, cw) < zero, F(-1.0f), one);
+    out.axis = axis, out.s = s;
+    // Incident axes permuted to (u, v, w).
+    F mu[3], mv[3], mw[3];
+    for (int j = 0; j < 3; ++j) {
+        mu[j] = pick(m[0][j], m[1][j], m[2][j], ku);
+        mv[j] = pick(m[0][j], m[1][j], m[2][j], kv);
+        mw[j] = pick(m[0][j], m[1][j], m[2][j], axis);
+    }
+    const F cu = pick(c[0], c[1], c[2], ku), cv = pick(c[0], c[1], c[2], kv);
+    const F Hu = pick(hr[0], hr[1], hr[2], ku), Hv = pick(hr[0], hr[1], hr[2], kv),
+            Hw = pick(hr[0], hr[1], hr[2], axis);
+    // Incident face: the face of the other box most anti-parallel to the reference normal.
+    const F a0 = abs(mw[0]), a1 = abs(mw[1]), a2 = abs(mw[2]);
+    const F j = select(simd::andMask(a0 >= a1, a0 >= a2), zero, select(a1 >= a2, one, F(2.0f)));
+    const F j1 = select(j == F(2.0f), zero, j + one), j2 = select(j == zero, F(2.0f), j - one);
+    const F sj = select(s * pick(mw[0], mw[1], mw[2], j) > zero, F(-1.0f), one);
+    out.incidentFace = F(2.0f) * j + select(sj < zero, one, zero);
+    const F hj = sj * pick(hi[0], hi[1], hi[2], j), h1 = pick(hi[0], hi[1], hi[2], j1),
+            h2 = pick(hi[0], hi[1], hi[2], j2);
+    const F ccu = cu + hj * pick(mu[0], mu[1], mu[2], j), ccv = cv + hj * pick(mv[0], mv[1], mv[2], j),
+            ccw = cw + hj * pick(mw[0], mw[1], mw[2], j);
+    const F uu = h1 * pick(mu[0], mu[1], mu[2], j1), uv = h1 * pick(mv[0], mv[1], mv[2], j1),
+            uw = h1 * pick(mw[0], mw[1], mw[2], j1);
+    const F vu = h2 * pick(mu[0], mu[1], mu[2], j2), vv = h2 * pick(mv[0], mv[1], mv[2], j2),
+            vw = h2 * pick(mw[0], mw[1], mw[2], j2);
+    static constexpr float kSu[4] = {1, -1, -1, 1}, kSv[4] = {1, 1, -1, -1};
+    F px[4], py[4], pz[4];
+    F dist[4][4];  // [vertex][side plane]: +u, -u, +v, -v
+    for (int i = 0; i < 4; ++i) {
+        px[i] = ccu + F(kSu[i]) * uu + F(kSv[i]) * vu;
+        py[i] = ccv + F(kSu[i]) * uv + F(kSv[i]) * vv;
+        pz[i] = ccw + F(kSu[i]) * uw + F(kSv[i]) * vw;
+        dist[i][0] = px[i] - Hu, dist[i][1] = -px[i] - Hu, dist[i][2] = py[i] - Hv, dist[i][3] = -py[i] - Hv;
+        out.u[i] = px[i], out.v[i] = py[i], out.w[i] = pz[i];
+        out.valid[i] = simd::andMask(simd::andMask(dist[i][0] <= zero, dist[i][1] <= zero),
+                                     simd::andMask(dist[i][2] <= zero, dist[i][3] <= zero));
+    }
+    for (int e = 0; e < 4; ++e) {
+        const int f = e == 3 ? 0 : e + 1;
+        for (int p = 0; p < 4; ++p) {
+            const F dc = dist[e][p], dd = dist[f][p];
+            const auto crosses = simd::notMask((dc <= zero) == (dd <= zero));
+            const int slot = kCrossingSlot + 4 * e + p;
+            if (simd::none(crosses)) {  // the common case: most edges cross no side plane
+                out.u[slot] = out.v[slot] = out.w[slot] = zero, out.valid[slot] = crosses;
+                continue;
+            }
+            const F frac = dc / select(crosses, dc - dd, one);
+            F x = px[e] + frac * (px[f] - px[e]), y = py[e] + frac * (py[f] - py[e]);
+            const F z = pz[e] + frac * (pz[f] - pz[e]);
+            auto inside = crosses;
+            if (p < 2) {
+                x = p == 0 ? Hu : -Hu;  // exactly on the plane
+                inside = simd::andMask(inside, simd::andMask(y - Hv <= zero, -y - Hv <= zero));
+            } else {
+                y = p == 2 ? Hv : -Hv;
+                inside = simd::andMask(inside, simd::andMask(x - Hu <= zero, -x - Hu <= zero));
+            }
+            out.u[slot] = x, out.v[slot] = y, out.w[slot] = z, out.valid[slot] = inside;
+        }
+    }
+    // Corners of the reference face inside the incident face: (u, v) = cc + a U + b V with |a|, |b| <= 1.
+    const F det = uu * vv - vu * uv;
+    const F invDet = one / select(det == zero, one, det);
+    for (int p1 = 0; p1 < 2; ++p1)
+        for (int p2 = 2; p2 < 4; ++p2) {
+            const F x = p1 == 0 ? Hu : -Hu, y = p2 == 2 ? Hv : -Hv;
+            const F du = x - ccu, dv = y - ccv;
+            const F a = (du * vv - vu * dv) * invDet, b = (uu * dv - du * uv) * invDet;
+            const int slot = kCornerSlot + 2 * p1 + p2 - 2;
+            out.u[slot] = x, out.v[slot] = y, out.w[slot] = ccw + a * uw + b * vw;
+            out.valid[slot] = simd::andMask(det != zero, simd::andMask(abs(a) <= one, abs(b) <= one));
+        }
+    // Points below the reference face plus the margin. A slot that no lane uses is skipped from here on (most are:
+    // a clipped quadrilateral has at most 8 vertices).
+    F count = zero;
+    int used[kFaceSlots];
+    int usedCount = 0;
+    for (int k = 0; k < kFaceSlots; ++k) {
+        out.depth[k] = Hw - s * out.w[k];
+        out.valid[k] = simd::andMask(out.valid[k], out.depth[k] >= -margin);
+        count = count + select(out.valid[k], one, zero);
+        if (simd::any(out.valid[k])) used[usedCount++] = k;
+    }
+    out.count = count;
+    // Up to four: the first four valid slots, else the reduction of clip.h (chooseFourPoints) over the valid ones.
+    F firstFour[4] = {zero, zero, zero, zero};
+    {
+        F seen = zero;
+        for (int x = 0; x < usedCount; ++x) {
+            const int k = used[x];
+            for (int o = 0; o < 4; ++o)
+                firstFour[o] = select(simd::andMask(out.valid[k], seen == F(float(o))), F(float(k)), firstFour[o]);
+            seen = seen + select(out.valid[k], one, zero);
+        }
+    }
+    for (int o = 0; o < 4; ++o) out.chosen[o] = firstFour[o];
+    const auto reduce = count > F(4.0f);
+    if (simd::none(reduce)) return;
+    F deepest(-INFINITY), su = zero, sv = zero;
+    for (int x = 0; x < usedCount; ++x) {
+        const int k = used[x];
+        deepest = select(simd::andMask(out.valid[k], out.depth[k] > deepest), out.depth[k], deepest);
+        su = su + select(out.valid[k], out.u[k], zero), sv = sv + select(out.valid[k], out.v[k], zero);
+    }
+    const F mu0 = su / count, mv0 = sv / count;
+    const F none(-1.0f);
+    F i0 = none, best = none;
+    for (int x = 0; x < usedCount; ++x) {
+        const int k = used[x];
+        const F du = out.u[k] - mu0, dv = out.v[k] - mv0, d2 = du * du + dv * dv;
+        const auto take =
+            simd::andMask(simd::andMask(out.valid[k], out.depth[k] >= deepest - F(kReductionDepthTie)), d2 > best);
+        best = select(take, d2, best), i0 = select(take, F(float(k)), i0);
+    }
+    F u0 = zero, v0 = zero;
+    for (int x = 0; x < usedCount; ++x) {
+        const int k = used[x];
+        const auto at = i0 == F(float(k));
+        u0 = select(at, out.u[k], u0), v0 = select(at, out.v[k], v0);
+    }
+    F i1 = none;
+    best = none;
+    for (int x = 0; x < usedCount; ++x) {
+        const int k = used[x];
+        const F du = out.u[k] - u0, dv = out.v[k] - v0, d2 = du * du + dv * dv;
+        const auto take = simd::andMask(simd::andMask(out.valid[k], i0 != F(float(k))), d2 > best);
+        best = select(take, d2, best), i1 = select(take, F(float(k)), i1);
+    }
+    F u1 = zero, v1 = zero;
+    for (int x = 0; x < usedCount; ++x) {
+        const int k = used[x];
+        const auto at = i1 == F(float(k));
+        u1 = select(at, out.u[k], u1), v1 = select(at, out.v[k], v1);
+    }
+    const F eu = u1 - u0, ev = v1 - v0;
+    F i2 = none, orient = one;
+    best = none;
+    for (int x = 0; x < usedCount; ++x) {
+        const int k = used[x];
+        const F area = eu * (out.v[k] - v0) - ev * (out.u[k] - u0), size = abs(area);
+        const auto take = simd::andMask(
+            simd::andMask(out.valid[k], simd::andMask(i0 != F(float(k)), i1 != F(float(k)))), size > best);
+        best = select(take, size, best), i2 = select(take, F(float(k)), i2);
+        orient = select(take, select(area < zero, F(-1.0f), one), orient);
+    }
+    F u2 = zero, v2 = zero;
+    for (int x = 0; x < usedCount; ++x) {
+        const int k = used[x];
+        const auto at = i2 == F(float(k));
+        u2 = select(at, out.u[k], u2), v2 = select(at, out.v[k], v2);
+    }
+    const F tu[3] = {u0, u1, u2}, tv[3] = {v0, v1, v2};
+    F i3 = none;
+    best = F(-3.4e38f);
+    for (int x = 0; x < usedCount; ++x) {
+        const int k = used[x];
+        F add(-3.4e38f);
+        for (int e = 0; e < 3; ++e) {
+            const int a = e, b = e == 2 ? 0 : e + 1;
+            const F area = -orient * ((tu[b] - tu[a]) * (out.v[k] - tv[a]) - (tv[b] - tv[a]) * (out.u[k] - tu[a]));
+            add = select(area > add, area, add);
+        }
+        const auto other = simd::andMask(i0 != F(float(k)), simd::andMask(i1 != F(float(k)), i2 != F(float(k))));
+        const auto take = simd::andMask(simd::andMask(out.valid[k], other), add > best);
+        best = select(take, add, best), i3 = select(take, F(float(k)), i3);
+    }
+    // Increasing order (a sorting network on the four).
+    F sel[4] = {i0, i1, i2, i3};
+    auto order = [&](int x, int y) {
+        const F low = simd::min(sel[x], sel[y]), high = simd::max(sel[x], sel[y]);
+        sel[x] = low, sel[y] = high;
+    };
+    order(0, 1), order(2, 3), order(0, 2), order(1, 3), order(1, 2);
+    for (int o = 0; o < 4; ++o) out.chosen[o] = select(reduce, sel[o], firstFour[o]);
+}
+
+/// FaceSlots stored lane by lane ([slot][lane]) for reading one pair at a time.
+template <std::size_t L>
+struct FaceLanes {
+    float u[kFaceSlots][L], v[kFaceSlots][L], w[kFaceSlots][L], depth[kFaceSlots][L];
+    float chosen[4][L], count[L], axis[L], s[L], incidentFace[L];
+};
+
+template <class F>
+void storeFace(const FaceSlots<F>& f, FaceLanes<simd::lanesOf<F>>& out) {
+    for (int k = 0; k < kFaceSlots; ++k) {
+        simd::store(out.u[k], f.u[k]), simd::store(out.v[k], f.v[k]), simd::store(out.w[k], f.w[k]);
+        simd::store(out.depth[k], f.depth[k]);
+    }
+    for (int o = 0; o < 4; ++o) simd::store(out.chosen[o], f.chosen[o]);
+    simd::store(out.count, f.count), simd::store(out.axis, f.axis), simd::store(out.s, f.s);
+    simd::store(out.incidentFace, f.incidentFace);
+}
+
+/// The chosen points of the face contacts, moved from the reference frame to the world (onto B's surface when B's
+/// face is the reference), and the normals, in lanes: the slots' values are gathered from the stored FaceLanes.
+template <class F>
+struct FacePoints {
+    F x[4], y[4], z[4], depth[4], slot[4];
+    F nx, ny, nz;
+};
+
+template <class F>
+void facePoints(const FaceLanes<simd::lanesOf<F>>& f, const BoxSat<F>& sat, const Vec3W<F>& posA, const Vec3W<F>& posB,
+                FacePoints<F>& out) {
+    using simd::select;
+    using I = simd::IntOf<F>;
+    const F zero(0.0f), one(1.0f), two(2.0f);
+    const auto useB = sat.useB;
+    const F axis = simd::load<F>(f.axis), s = simd::load<F>(f.s);
+    const F ku = select(axis == two, zero, axis + one);
+    F R[3][3];
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) R[r][c] = select(useB, sat.rb[r][c], sat.ra[r][c]);
+    const F nl[3] = {select(axis == zero, s, zero), select(axis == one, s, zero), select(axis == two, s, zero)};
+    F n[3];
+    for (int r = 0; r < 3; ++r) {
+        n[r] = R[r][0] * nl[0] + R[r][1] * nl[1] + R[r][2] * nl[2];
+        n[r] = select(useB, -n[r], n[r]);
+    }
+    out.nx = n[0], out.ny = n[1], out.nz = n[2];
+    const F origin[3] = {select(useB, posB.x, posA.x), select(useB, posB.y, posA.y), select(useB, posB.z, posA.z)};
+    const I lanes(static_cast<std::int32_t>(simd::lanesOf<F>));
+    const I lane = simd::toInt(simd::laneIndices<F>());
+    const F count = simd::load<F>(f.count);
+    for (int o = 0; o < 4; ++o) {
+        if (simd::none(count > F(static_cast<float>(o)))) {  // no lane has an o-th point (or any later one)
+            for (; o < 4; ++o) out.x[o] = out.y[o] = out.z[o] = out.depth[o] = out.slot[o] = zero;
+            break;
+        }
+        const F slot = simd::load<F>(f.chosen[o]);
+        const I index = simd::toInt(slot) * lanes + lane;
+        const F u = simd::gather(&f.u[0][0], index), v = simd::gather(&f.v[0][0], index);
+        const F depth = simd::gather(&f.depth[0][0], index);
+        F w = simd::gather(&f.w[0][0], index);
+        w = select(useB, w + s * depth, w);  // onto B's reference face (B's surface)
+        F p[3];
+        for (int c = 0; c < 3; ++c) {
+            const F cf(static_cast<float>(c));
+            p[c] = select(axis == cf, w, select(ku == cf, u, v));
+        }
+        out.x[o] = origin[0] + (R[0][0] * p[0] + R[0][1] * p[1] + R[0][2] * p[2]);
+        out.y[o] = origin[1] + (R[1][0] * p[0] + R[1][1] * p[1] + R[1][2] * p[2]);
+        out.z[o] = origin[2] + (R[2][0] * p[0] + R[2][1] * p[1] + R[2][2] * p[2]);
+        out.depth[o] = depth, out.slot[o] = slot;
+    }
+}
+
+/// FacePoints stored lane by lane.
+template <std::size_t L>
+struct FacePointLanes {
+    float x[4][L], y[4][L], z[4][L], depth[4][L], slot[4][L];
+    float nx[L], ny[L], nz[L];
+};
+
+template <class F>
+void storePoints(const FacePoints<F>& p, FacePointLanes<simd::lanesOf<F>>& out) {
+    for (int o = 0; o < 4; ++o) {
+        simd::store(out.x[o], p.x[o]), simd::store(out.y[o], p.y[o]), simd::store(out.z[o], p.z[o]);
+        simd::store(out.depth[o], p.depth[o]), simd::store(out.slot[o], p.slot[o]);
+    }
+    simd::store(out.nx, p.nx), simd::store(out.ny, p.ny), simd::store(out.nz, p.nz);
+}
+
+/// Lane k of the face contacts into a manifold.
+template <std::size_t L>
+bool emitFace(const FaceLanes<L>& f, const FacePointLanes<L>& p, std::size_t k, bool useB, Manifold& out) {
+    const int axis = static_cast<int>(f.axis[k]);
+    const int count = std::min(static_cast<int>(f.count[k]), 4);
+    const std::uint32_t refFace = 2u * static_cast<std::uint32_t>(axis) + (f.s[k] < 0 ? 1u : 0u);
+    const std::uint32_t base = ((useB ? kBoxFeatureFaceB : kBoxFeatureFaceA) << kBoxFeatureKindShift) |
+                               (refFace << 16) | (static_cast<std::uint32_t>(f.incidentFace[k]) << 8);
+    out.normal = {p.nx[k], p.ny[k], p.nz[k]};
+    for (int o = 0; o < count; ++o) {
+        out.points[o].position = {p.x[o][k], p.y[o][k], p.z[o][k]};
+        out.points[o].depth = p.depth[o][k];
+        out.points[o].feature = base | slotId(static_cast<int>(p.slot[o][k]));
+    }
+    out.pointCount = count;
+    return count > 0;
+}
+
+/// The edge-edge contact of one pair whose SAT chose an edge axis: a single point.
+bool finishEdge(const BoxSat<float>& sat, Vec3 posA, Vec3 halfA, Vec3 halfB, float margin, Manifold& out) {
     out.pointCount = 0;
     const float ha[3] = {halfA.x, halfA.y, halfA.z}, hb[3] = {halfB.x, halfB.y, halfB.z};
     const auto& r = sat.r;
     const auto& t = sat.t;
     const auto& ra = sat.ra;
-    const auto& rb = sat.rb;
-    const bool useB = sat.useB;
-    const int axisA = static_cast<int>(sat.axisA), axisB = static_cast<int>(sat.axisB);
-    const float tbBest = sat.tbBest;
-
-    if (sat.useEdge) {
+    {
         // Edge-edge: one point at the closest points of the two supporting edges.
         const int i = static_cast<int>(sat.edgeI), j = static_cast<int>(sat.edgeJ);
         const int i1 = i == 2 ? 0 : i + 1, i2 = i == 0 ? 2 : i - 1;
@@ -346,47 +557,29 @@ bool finishBoxes(const BoxSat<float>& sat, Vec3 posA, Vec3 halfA, Vec3 posB, Vec
         out.pointCount = 1;
         return true;
     }
-
-    float p[4][3], depth[4];
-    std::uint8_t ids[4];
-    int incidentFace = 0, count, axis;
-    float s;
-    if (!useB) {
-        axis = axisA, s = signOf(t[axisA]);
-        count = clipFace(r, t, ha, hb, axis, s, margin, p, depth, ids, incidentFace);
-        const float nl[3] = {axis == 0 ? s : 0.0f, axis == 1 ? s : 0.0f, axis == 2 ? s : 0.0f};
-        out.normal = mul(ra, nl);
-        for (int k = 0; k < count; ++k) out.points[k].position = posA + mul(ra, p[k]);
-    } else {
-        // A in B's frame: transpose of r, centre -r^T t.
-        float rt[3][3], tt[3];
-        for (int i = 0; i < 3; ++i) {
-            tt[i] = -(t[0] * r[0][i] + t[1] * r[1][i] + t[2] * r[2][i]);
-            for (int j = 0; j < 3; ++j) rt[i][j] = r[j][i];
-        }
-        axis = axisB, s = signOf(-tbBest);  // B's face pointing towards A
-        count = clipFace(rt, tt, hb, ha, axis, s, margin, p, depth, ids, incidentFace);
-        const float nl[3] = {axis == 0 ? s : 0.0f, axis == 1 ? s : 0.0f, axis == 2 ? s : 0.0f};
-        out.normal = -mul(rb, nl);
-        // The clipped points lie on A's incident face; move them onto B's reference face (B's surface).
-        for (int k = 0; k < count; ++k) {
-            p[k][axis] += s * depth[k];
-            out.points[k].position = posB + mul(rb, p[k]);
-        }
-    }
-    const std::uint32_t refFace = 2u * static_cast<std::uint32_t>(axis) + (s < 0 ? 1u : 0u);
-    const std::uint32_t base = ((useB ? kBoxFeatureFaceB : kBoxFeatureFaceA) << kBoxFeatureKindShift) |
-                               (refFace << 16) | (static_cast<std::uint32_t>(incidentFace) << 8);
-    for (int k = 0; k < count; ++k) {
-        out.points[k].depth = depth[k];
-        out.points[k].feature = base | ids[k];
-    }
-    out.pointCount = count;
-    return count > 0;
+    return false;
 }
 
 Vec3W<float> wide1(Vec3 v) { return {v.x, v.y, v.z}; }
 QuatW<float> wide1(Quat q) { return {q.x, q.y, q.z, q.w}; }
+
+/// The contact of one pair (lane 0 of a float SAT): its edge-edge point or its clipped reference face.
+bool finishOne(const BoxSat<float>& sat, Vec3 posA, Vec3 halfA, Vec3 posB, Vec3 halfB, float margin, Manifold& out) {
+    if (sat.separated) {
+        out.pointCount = 0;
+        return false;
+    }
+    if (sat.useEdge) return finishEdge(sat, posA, halfA, halfB, margin, out);
+    FaceSlots<float> face;
+    faceSlots<float>(sat, wide1(halfA), wide1(halfB), margin, face);
+    FaceLanes<1> stored;
+    storeFace(face, stored);
+    FacePoints<float> points;
+    facePoints<float>(stored, sat, wide1(posA), wide1(posB), points);
+    FacePointLanes<1> storedPoints;
+    storePoints(points, storedPoints);
+    return emitFace(stored, storedPoints, 0, sat.useB, out);
+}
 
 /// Pair i of a batch, one lane.
 bool collideAt(const BoxPairs& in, std::size_t i, Manifold& out) {
@@ -395,37 +588,52 @@ bool collideAt(const BoxPairs& in, std::size_t i, Manifold& out) {
     BoxSat<float> sat;
     boxSat<float>(wide1(pa), {in.aqx[i], in.aqy[i], in.aqz[i], in.aqw[i]}, wide1(ha), wide1(pb),
                   {in.bqx[i], in.bqy[i], in.bqz[i], in.bqw[i]}, wide1(hb), in.margin[i], sat);
-    if (sat.separated) {
-        out.pointCount = 0;
-        return false;
-    }
-    return finishBoxes(sat, pa, ha, pb, hb, in.margin[i], out);
+    return finishOne(sat, pa, ha, pb, hb, in.margin[i], out);
 }
 
-/// Pairs [i, i + kLanes): the axis tests in SIMD lanes, then each touching pair's clipping on its own.
-void collideWideAt(const BoxPairs& in, std::size_t i, Manifold* out, const std::uint32_t* outIndex) {
+/// Pairs [i, i + kLanes): the axis tests and the face clipping in SIMD lanes, then each pair's manifold (an
+/// edge-edge pair's single point on its own).
+void collideWideAt(const BoxPairs& in, std::size_t i, std::size_t lanes, Manifold* out, const std::uint32_t* outIndex) {
     BoxSat<FloatW> sat;
+    const Vec3W<FloatW> halfA = Vec3W<FloatW>::load(in.ahx, in.ahy, in.ahz, i);
+    const Vec3W<FloatW> halfB = Vec3W<FloatW>::load(in.bhx, in.bhy, in.bhz, i);
+    const FloatW margin = simd::load<FloatW>(in.margin + i);
     boxSat<FloatW>(Vec3W<FloatW>::load(in.ax, in.ay, in.az, i), QuatW<FloatW>::load(in.aqx, in.aqy, in.aqz, in.aqw, i),
-                   Vec3W<FloatW>::load(in.ahx, in.ahy, in.ahz, i), Vec3W<FloatW>::load(in.bx, in.by, in.bz, i),
-                   QuatW<FloatW>::load(in.bqx, in.bqy, in.bqz, in.bqw, i),
-                   Vec3W<FloatW>::load(in.bhx, in.bhy, in.bhz, i), simd::load<FloatW>(in.margin + i), sat);
+                   halfA, Vec3W<FloatW>::load(in.bx, in.by, in.bz, i),
+                   QuatW<FloatW>::load(in.bqx, in.bqy, in.bqz, in.bqw, i), halfB, margin, sat);
     if (simd::all(sat.separated)) {
-        for (std::size_t k = 0; k < simd::kLanes; ++k) out[outIndex ? outIndex[i + k] : i + k].pointCount = 0;
+        for (std::size_t k = 0; k < lanes; ++k) out[outIndex ? outIndex[i + k] : i + k].pointCount = 0;
         return;
     }
     constexpr int kValues = 3 * 9 + 3 + 8;
     alignas(64) float values[kValues][simd::kLanes];
     bool separated[simd::kLanes], useB[simd::kLanes], useEdge[simd::kLanes];
     int f = 0;
-    forEachValue(sat, [&](FloatW& v) { simd::store(values[f++], v); });
+    if (simd::any(simd::andMask(sat.useEdge, simd::notMask(sat.separated))))  // only edge-edge pairs read them back
+        forEachValue(sat, [&](FloatW& v) { simd::store(values[f++], v); });
     simd::storeMask(separated, sat.separated);
     simd::storeMask(useB, sat.useB);
     simd::storeMask(useEdge, sat.useEdge);
-    for (std::size_t k = 0; k < simd::kLanes; ++k) {
+    alignas(64) FaceLanes<simd::kLanes> face;
+    alignas(64) FacePointLanes<simd::kLanes> points;
+    if (simd::any(simd::notMask(simd::orMask(sat.separated, sat.useEdge)))) {
+        FaceSlots<FloatW> slots;
+        faceSlots<FloatW>(sat, halfA, halfB, margin, slots);
+        storeFace(slots, face);
+        FacePoints<FloatW> wide;
+        facePoints<FloatW>(face, sat, Vec3W<FloatW>::load(in.ax, in.ay, in.az, i),
+                           Vec3W<FloatW>::load(in.bx, in.by, in.bz, i), wide);
+        storePoints(wide, points);
+    }
+    for (std::size_t k = 0; k < lanes; ++k) {
         const std::size_t p = i + k;
         Manifold& m = out[outIndex ? outIndex[p] : p];
         if (separated[k]) {
             m.pointCount = 0;
+            continue;
+        }
+        if (!useEdge[k]) {
+            emitFace(face, points, k, useB[k], m);
             continue;
         }
         BoxSat<float> one;
@@ -433,9 +641,9 @@ void collideWideAt(const BoxPairs& in, std::size_t i, Manifold* out, const std::
         forEachValue(one, [&](float& v) { v = values[f++][k]; });
         one.separated = false;
         one.useB = useB[k];
-        one.useEdge = useEdge[k];
-        finishBoxes(one, {in.ax[p], in.ay[p], in.az[p]}, {in.ahx[p], in.ahy[p], in.ahz[p]},
-                    {in.bx[p], in.by[p], in.bz[p]}, {in.bhx[p], in.bhy[p], in.bhz[p]}, in.margin[p], m);
+        one.useEdge = true;
+        finishEdge(one, {in.ax[p], in.ay[p], in.az[p]}, {in.ahx[p], in.ahy[p], in.ahz[p]},
+                   {in.bhx[p], in.bhy[p], in.bhz[p]}, in.margin[p], m);
     }
 }
 
@@ -445,17 +653,17 @@ bool collideBoxes(const Transform& a, Vec3 halfA, const Transform& b, Vec3 halfB
     BoxSat<float> sat;
     boxSat<float>(wide1(a.position), wide1(a.rotation), wide1(halfA), wide1(b.position), wide1(b.rotation),
                   wide1(halfB), margin, sat);
-    if (sat.separated) {
-        out.pointCount = 0;
-        return false;
-    }
-    return finishBoxes(sat, a.position, halfA, b.position, halfB, margin, out);
+    return finishOne(sat, a.position, halfA, b.position, halfB, margin, out);
 }
 
-void collideBoxesBatch(const BoxPairs& in, std::size_t n, Manifold* out, const std::uint32_t* outIndex) {
+void collideBoxesBatch(const BoxPairs& in, std::size_t n, Manifold* out, const std::uint32_t* outIndex, bool padded) {
     std::size_t i = 0;
     for (const std::size_t end = simd::roundDownToLanes<FloatW>(n); i < end; i += simd::kLanes)
-        collideWideAt(in, i, out, outIndex);
+        collideWideAt(in, i, simd::kLanes, out, outIndex);
+    if (padded && i < n) {
+        collideWideAt(in, i, n - i, out, outIndex);
+        return;
+    }
     for (; i < n; ++i) collideAt(in, i, out[outIndex ? outIndex[i] : i]);
 }
 

@@ -1,8 +1,14 @@
 #pragma once
-// Box-box narrow phase: separating-axis test over the 15 axes, then reference-face clipping (Sutherland-Hodgman)
-// reduced to at most 4 points, or a single point for an edge-edge contact. Allocation-free. The axis tests are
+// Box-box narrow phase: separating-axis test over the 15 axes, then reference-face clipping reduced to at most 4
+// points, or a single point for an edge-edge contact. Allocation-free. The axis tests and the face clipping are
 // written once over a lane type: the batched form runs them for 16 pairs at a time in SIMD lanes (the stage's
 // box-box bucket goes through it), the per-pair form runs the same code on one pair, so both agree bit for bit.
+// Clipping: the incident face is a parallelogram and the reference face's side planes bound a rectangle, so the
+// clipped polygon's vertices are among 24 fixed candidates -- the 4 incident vertices, the 16 crossings of an
+// incident edge with a side plane, the 4 reference-face corners -- each kept where it lies inside every side plane
+// (a corner: inside the incident face) and within the margin below the reference face. Fixed slots need no
+// compaction, which is what lets 16 pairs clip in lanes; the points are what Sutherland-Hodgman would give, in slot
+// order, and more than 4 are reduced as clip.h's chooseFourPoints does (deepest, farthest, largest area).
 //
 // Robustness choices (and why):
 // - All work happens in the reference box's frame relative to its centre: only the centre difference of the two
@@ -68,10 +74,12 @@ struct BoxPairs {
     const float* margin;
 };
 
-/// Pairs [0, n): the 15 axis tests of 16 pairs at a time in SIMD lanes, then clipping per pair along its winning
-/// axis (a scalar tail for the rest). Pair k's manifold goes to out[outIndex[k]] (out[k] without an index) and is
-/// exactly what collideBoxes gives for it.
-void collideBoxesBatch(const BoxPairs& in, std::size_t n, Manifold* out, const std::uint32_t* outIndex = nullptr);
+/// Pairs [0, n): the 15 axis tests and the face clipping of 16 pairs at a time in SIMD lanes (an edge-edge pair's
+/// single point is found on its own), and a scalar tail for the rest; with `padded`, the input arrays hold whole
+/// SIMD batches (entries up to n rounded up to the lane count are readable) and the tail runs in lanes as well.
+/// Pair k's manifold goes to out[outIndex[k]] (out[k] without an index) and is exactly what collideBoxes gives.
+void collideBoxesBatch(const BoxPairs& in, std::size_t n, Manifold* out, const std::uint32_t* outIndex = nullptr,
+                       bool padded = false);
 /// The same, one pair at a time (the scalar reference).
 void collideBoxesBatchScalar(const BoxPairs& in, std::size_t n, Manifold* out, const std::uint32_t* outIndex = nullptr);
 

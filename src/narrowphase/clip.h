@@ -2,7 +2,7 @@
 // Polygon clipping and contact reduction shared by the polytope kernels (hull-hull, box-hull, capsule-hull):
 // Sutherland-Hodgman clipping of an incident polygon against the side planes of a reference face, and reduction of
 // the clipped polygon to at most four contact points (deepest point first, then the points that span the largest
-// area; box_box.cpp runs the same selection on its box-frame coordinates).
+// area; box_box.cpp runs the same selection, written for SIMD lanes, on its box-frame coordinates).
 #include <cstdint>
 
 #include "rubble/math.h"

@@ -439,21 +439,21 @@ GjkResult segmentBoxDistance(const Vec3 seg[2], float radius, Vec3 h, float marg
         const Vec3 c = cross(d, axis);
         const float len = length(c);
         if (len > eps * std::sqrt(dd) && len > kBoxEdgeParallelEpsilon * std::sqrt(dd))
-            consider(dot(c, seg[0]) < 0 ? -c / len : c / len, seg[0], k);
+            consider(c * ((dot(c, seg[0]) < 0 ? -1.0f : 1.0f) / len), seg[0], k);
     }
     for (int i = 0; i < 8; ++i) {
         const Vec3 v{i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z};
         const float t = dd > 0 ? clamp01(dot(v - seg[0], d) / dd) : 0.0f;
         const Vec3 q = seg[0] + d * t, a = q - v;
         const float len = length(a);
-        if (len > eps) consider(a / len, q, -1);
+        if (len > eps) consider(a * (1.0f / len), q, -1);
     }
     for (int e = 0; e < 2; ++e) {
         const Vec3 p = seg[e];
         const Vec3 q{maxf(-h.x, minf(p.x, h.x)), maxf(-h.y, minf(p.y, h.y)), maxf(-h.z, minf(p.z, h.z))};
         const Vec3 a = p - q;
         const float len = length(a);
-        if (len > eps) consider(a / len, p, -1);
+        if (len > eps) consider(a * (1.0f / len), p, -1);
     }
     if (best <= 1e-6f) return r;  // cores overlap (or touch): no exact distance from the axes
     if (bestEdge >= 0) {

@@ -84,18 +84,43 @@ Posed posedSide(const BodyStorage& storage, const std::vector<Shape>& shapes, co
 
 CapsuleSegment segmentOf(const Posed& p) { return capsuleSegmentOf(p.pose, p.shape->halfHeight, p.shape->radius); }
 
-/// World vertices and active-edge mask of triangle t of a static mesh or heightfield.
-void triangleOf(const Posed& mesh, std::uint32_t t, TriangleVertices& vertices, std::uint8_t& activeEdges) {
-    if (mesh.shape->kind == ShapeKind::TriangleMesh) {
-        const TriangleMesh& m = *mesh.shape->mesh;
-        for (int k = 0; k < 3; ++k) vertices[k] = apply(mesh.pose, m.vertices[m.indices[3 * std::size_t(t) + k]]);
-        activeEdges = m.activeEdges.empty() ? kAllEdgesActive : m.activeEdges[t];
-    } else {
-        const std::array<Vec3, 3> local = heightfieldTriangle(*mesh.shape->heightfield, t);
-        for (int k = 0; k < 3; ++k) vertices[k] = apply(mesh.pose, local[k]);
-        activeEdges = heightfieldActiveEdges(*mesh.shape->heightfield, t);
+/// A body against a static mesh or heightfield: what all its triangle jobs (which come in a row) share, worked out
+/// once. Terrain usually sits at the origin unrotated; its vertices are then used as stored.
+struct MeshSide {
+    const TriangleMesh* mesh = nullptr;  ///< else a heightfield
+    const Heightfield* heightfield = nullptr;
+    bool identity = false;
+    Mat3 rotation;
+    Vec3 position;
+    TriangleBox box;         ///< body A when it is a box
+    CapsuleSegment capsule;  ///< body A when it is a capsule
+
+    void prepare(const Posed& a, const Posed& meshBody) {
+        const Shape& shape = *meshBody.shape;
+        mesh = shape.kind == ShapeKind::TriangleMesh ? shape.mesh.get() : nullptr;
+        heightfield = mesh ? nullptr : shape.heightfield.get();
+        const Transform& pose = meshBody.pose;
+        identity = pose.rotation == Quat{} && pose.position.x == 0 && pose.position.y == 0 && pose.position.z == 0;
+        position = pose.position;
+        rotation = rotationMatrix(pose.rotation);
+        if (a.shape->kind == ShapeKind::Box) box = triangleBox(a.pose, a.shape->halfExtents);
+        if (a.shape->kind == ShapeKind::Capsule) capsule = segmentOf(a);
     }
-}
+
+    /// World vertices and active-edge mask of triangle t.
+    void triangle(std::uint32_t t, TriangleVertices& vertices, std::uint8_t& activeEdges) const {
+        if (mesh) {
+            const std::uint32_t* index = &mesh->indices[3 * std::size_t(t)];
+            for (int k = 0; k < 3; ++k) vertices[k] = mesh->vertices[index[k]];
+            activeEdges = mesh->activeEdges.empty() ? kAllEdgesActive : mesh->activeEdges[t];
+        } else {
+            vertices = heightfieldTriangle(*heightfield, t);
+            activeEdges = heightfieldActiveEdges(*heightfield, t);
+        }
+        if (!identity)
+            for (Vec3& v : vertices) v = rotation * v + position;
+    }
+};
 
 /// Centre of a sphere side. A whole moving sphere's centre is its centre of mass, so only the position rows are
 /// read: the common case (S4) then touches 3 arrays per side instead of every pose array.
@@ -114,17 +139,11 @@ void collideBoxCapsule(const Posed& box, const Posed& capsule, float margin, Man
     out.normal = -out.normal;
 }
 
-/// One pair through its scalar kernel; for triangle kernels B is the mesh and `triangle` picks the triangle.
+/// One pair through its scalar kernel (not the triangle kernels: collideTriangle).
 template <class HullMap>
-void collide(PairKernel kernel, const Posed& a, const Posed& b, std::uint32_t triangle, float margin,
-             const HullMap& hulls, Manifold& out) {
+void collide(PairKernel kernel, const Posed& a, const Posed& b, float margin, const HullMap& hulls, Manifold& out) {
     auto adjacency = [&](const Posed& p) -> const HullAdjacency& { return *hulls.at(p.shape->hull.get()).adjacency; };
     out.pointCount = 0;
-    TriangleVertices tri;
-    std::uint8_t active = 0;
-    if (kernel == PairKernel::SphereTriangle || kernel == PairKernel::CapsuleTriangle ||
-        kernel == PairKernel::BoxTriangle || kernel == PairKernel::HullTriangle)
-        triangleOf(b, triangle, tri, active);
     switch (kernel) {
         case PairKernel::SphereSphere:
             collideSpheres(a.pose.position, a.shape->radius, b.pose.position, b.shape->radius, margin, out);
@@ -159,18 +178,37 @@ void collide(PairKernel kernel, const Posed& a, const Posed& b, std::uint32_t tr
             collideHulls(*a.shape->hull, adjacency(a), a.pose, *b.shape->hull, adjacency(b), b.pose, margin, out);
             break;
         case PairKernel::SphereTriangle:
+        case PairKernel::CapsuleTriangle:
+        case PairKernel::BoxTriangle:
+        case PairKernel::HullTriangle:
+        case PairKernel::Count:
+            break;  // triangles: collideTriangle
+    }
+}
+
+/// Body A against triangle t of the mesh `mesh` (prepared for A).
+template <class HullMap>
+void collideTriangle(PairKernel kernel, const Posed& a, const MeshSide& mesh, std::uint32_t t, float margin,
+                     const HullMap& hulls, Manifold& out) {
+    out.pointCount = 0;
+    TriangleVertices tri;
+    std::uint8_t active = 0;
+    mesh.triangle(t, tri, active);
+    switch (kernel) {
+        case PairKernel::SphereTriangle:
             collideSphereTriangle(a.pose.position, a.shape->radius, tri, active, margin, out);
             break;
         case PairKernel::CapsuleTriangle:
-            collideCapsuleTriangle(segmentOf(a), tri, active, margin, out);
+            collideCapsuleTriangle(mesh.capsule, tri, active, margin, out);
             break;
         case PairKernel::BoxTriangle:
-            collideBoxTriangle(a.pose, a.shape->halfExtents, tri, active, margin, out);
+            collideBoxTriangle(mesh.box, tri, active, margin, out);
             break;
         case PairKernel::HullTriangle:
-            collideHullTriangle(*a.shape->hull, adjacency(a), a.pose, tri, active, margin, out);
+            collideHullTriangle(*a.shape->hull, *hulls.at(a.shape->hull.get()).adjacency, a.pose, tri, active, margin,
+                                out);
             break;
-        case PairKernel::Count:
+        default:
             break;
     }
 }
@@ -351,7 +389,7 @@ void collideBatched(Batched kernel, const std::vector<std::uint32_t>& list, Narr
                     {in[kPx],     in[kPy],     in[kPz],     in[kQx],     in[kQy],     in[kQz],     in[kQw],
                      in[kSx],     in[kSy],     in[kSz],     in[b + kPx], in[b + kPy], in[b + kPz], in[b + kQx],
                      in[b + kQy], in[b + kQz], in[b + kQw], in[b + kSx], in[b + kSy], in[b + kSz], margin},
-                    n, chunk.manifolds.data(), jobs);
+                    n, chunk.manifolds.data(), jobs, /*padded=*/true);
                 continue;
             case Batched::SphereSphere:
                 collideSpheresBatch(
@@ -528,9 +566,24 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             auto mesh = std::upper_bound(candidates.meshes.begin(), candidates.meshes.end(), first,
                                          [](std::uint32_t t, const MeshPair& m) { return t < m.firstTriangle; }) -
                         1;
-            for (auto t = first; t < end - movingCount - staticCount; ++t) {
-                while (t >= mesh->firstTriangle + mesh->triangleCount) ++mesh;
+            const auto last = static_cast<std::uint32_t>(end - movingCount - staticCount);
+            for (auto t = first; t < last; ++mesh) {
+                const std::uint32_t runEnd = std::min(last, mesh->firstTriangle + mesh->triangleCount);
+                if (t >= runEnd) continue;
+                // The body's job for its first triangle here stands for the rest of its run (a compound body makes
+                // one job per child and triangle, in that order, so it goes through addJob for every triangle).
+                const std::size_t at = chunk.jobs.size();
                 addJob(mesh->moving, false, mesh->staticBody, true, candidates.meshTriangles[t]);
+                if (chunk.jobs.size() != at + 1 || chunk.jobs[at].pair.childA != kNoChild) {
+                    for (++t; t < runEnd; ++t)
+                        addJob(mesh->moving, false, mesh->staticBody, true, candidates.meshTriangles[t]);
+                    continue;
+                }
+                Job job = chunk.jobs[at];
+                for (++t; t < runEnd; ++t) {
+                    job.pair.triangle = candidates.meshTriangles[t];
+                    chunk.jobs.push_back(job);
+                }
             }
         }
         runChunk(chunk, *scratch_[static_cast<std::size_t>(worker)], storage, shapes, params);
@@ -572,6 +625,7 @@ void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorag
     // worked out once.
     const ContactPair* last = nullptr;
     Posed a{}, b{};
+    MeshSide mesh;
     float margin = 0;
     for (std::uint32_t j = 0; j < n; ++j) {
         const Job& job = chunk.jobs[j];
@@ -608,9 +662,13 @@ void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorag
                                               motionB.reach);
             a = posedSide(storage, shapes, p, false);
             b = posedSide(storage, shapes, p, true);
+            if (p.triangle != ~0u) mesh.prepare(a, b);
             last = &p;
         }
-        collide(job.kernel, a, b, p.triangle, margin, hullAdjacency_, chunk.manifolds[j]);
+        if (p.triangle != ~0u)
+            collideTriangle(job.kernel, a, mesh, p.triangle, margin, hullAdjacency_, chunk.manifolds[j]);
+        else
+            collide(job.kernel, a, b, margin, hullAdjacency_, chunk.manifolds[j]);
     }
     for (int kernel = 0; kernel < static_cast<int>(Batched::Count); ++kernel)
         if (!scratch.batched[kernel].empty())

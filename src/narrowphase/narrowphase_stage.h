@@ -1,8 +1,9 @@
 #pragma once
 // The narrow-phase stage: candidate pairs from the broad phase become contact manifolds. The candidates are cut into
 // fixed chunks that run in parallel; within a chunk the pairs are bucketed by shape-kind pair, and the buckets with a
-// batched kernel (sphere-sphere, sphere-box, sphere-capsule, capsule-capsule, and box-box's axis tests) run in SIMD
-// lanes on pose data gathered lane-wide, the rest one pair at a time. Every pair gets its own speculative margin.
+// batched kernel (sphere-sphere, sphere-box, sphere-capsule, capsule-capsule, and box-box's axis tests and face
+// clipping) run in SIMD lanes on pose data gathered lane-wide, the rest one pair at a time. Every pair gets its own
+// speculative margin.
 // The manifolds come out in the candidates' canonical order whatever the thread count.
 #include <cstdint>
 #include <memory>

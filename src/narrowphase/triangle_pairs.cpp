@@ -39,13 +39,13 @@ constexpr int featureEdge(int e) { return 1 + e; }
 constexpr int featureVertex(int v) { return 4 + v; }
 
 /// Unit normal of triangle (0, ab, ac), counter-clockwise; false for (nearly) zero-area or non-finite triangles.
-bool faceNormal(Vec3 ab, Vec3 ac, Vec3& normal) {
+[[gnu::always_inline]] inline bool faceNormal(Vec3 ab, Vec3 ac, Vec3& normal) {
     const Vec3 n = cross(ab, ac);
     const Vec3 bc = ac - ab;
     const float longest = std::max({dot(ab, ab), dot(ac, ac), dot(bc, bc)});
     const float n2 = dot(n, n);
     if (!(n2 > kDegenerateAreaSq * longest * longest) || !std::isfinite(n2) || !std::isfinite(longest)) return false;
-    normal = n / std::sqrt(n2);
+    normal = n * (1.0f / std::sqrt(n2));  // one division, not three: this runs for every triangle job
     return true;
 }
 
@@ -55,6 +55,24 @@ bool featureActive(int feature, std::uint8_t activeEdges) {
     if (feature < 4) return ((activeEdges >> (feature - 1)) & 1u) != 0;
     const int v = feature - 4;  // vertex v ends edge v - 1 and starts edge v
     return ((activeEdges >> v) & 1u) != 0 || ((activeEdges >> ((v + 2) % 3)) & 1u) != 0;
+}
+
+/// Rejection before the closest-point search of the sphere and capsule kernels, for the many triangles that a
+/// body's bounds overlap but that lie out of its reach: a segment whose two ends (signed distances d0, d1 from a plane
+/// of normal length sqrt(normal2) that has the whole triangle on its other side) are both beyond `reach` from it
+/// cannot come within reach of the triangle. The plane is the triangle's own (either side) or an edge's side plane.
+/// The slack (1e-4 of the reach) leaves every borderline case to the exact test, so rounding here never drops a
+/// contact that the exact test keeps.
+bool beyondReach(float d0, float d1, float reach, float normal2) {
+    float nearer;
+    if (d0 > 0 && d1 > 0)
+        nearer = std::min(d0, d1);
+    else if (d0 < 0 && d1 < 0)
+        nearer = -std::max(d0, d1);
+    else
+        return false;  // the ends straddle the plane or touch it (or are not numbers)
+    const float limit = reach * (1.0f + 1e-4f);
+    return nearer * nearer > limit * limit * normal2;
 }
 
 struct TrianglePoint {
@@ -145,15 +163,22 @@ Scratch& scratch() {
     return s;
 }
 
-/// Clips polygon `poly` (n vertices, capacity kClipCapacity) in place against the planes dot(normals[i], x) <=
-/// offsets[i], plane i numbered i for the point ids; returns the new count.
-int clipAgainst(ClipVertex* poly, int n, const Vec3* normals, const float* offsets, int planes) {
-    ClipVertex* tmp = scratch().tmp;
+/// Clips polygon `poly` (n vertices, capacity kClipCapacity; the scratch's `poly` buffer) against the planes
+/// dot(normals[i], x) <= offsets[i], plane i numbered i for the point ids. Sets n to the new count and returns where
+/// the polygon now is: the passes alternate between the scratch's two buffers instead of copying back. A plane with
+/// every vertex inside would hand the polygon on unchanged, so it is skipped (for a body resting inside a triangle
+/// most planes are).
+const ClipVertex* clipAgainst(ClipVertex* poly, int& n, const Vec3* normals, const float* offsets, int planes) {
+    ClipVertex* cur = poly;
+    ClipVertex* spare = scratch().tmp;
     for (int p = 0; p < planes && n > 0; ++p) {
-        n = clipPolygon(poly, n, tmp, normals[p], offsets[p], p);
-        std::copy(tmp, tmp + n, poly);
+        bool inside = true;
+        for (int e = 0; e < n; ++e) inside &= dot(normals[p], cur[e].p) - offsets[p] <= 0;
+        if (inside) continue;
+        n = clipPolygon(cur, n, spare, normals[p], offsets[p], p);
+        std::swap(cur, spare);
     }
-    return n;
+    return cur;
 }
 
 /// Drops candidates within `tol` of a deeper one (of an equally deep earlier one on ties). The deepest survives, and
@@ -178,13 +203,32 @@ void mergeNearDuplicates(Candidates& c, float tol) {
 /// Writes at most 4 of the candidates (the shared reduction: deepest first, then the largest area in the plane
 /// across `n`) to `out`, moved from the kernel's frame to the world by `pose`.
 int emitReduced(const Candidates& c, Vec3 n, const Transform& pose, Manifold& out) {
-    Vec3 u, v;
-    planeBasis(n, u, v);
-    int chosen[4];
-    const int count = reduceContactPoints(c.position, c.depth, c.count, u, v, chosen);
+    int chosen[4] = {0, 1, 2, 3};
+    int count = c.count;
+    if (count > 4) {
+        Vec3 u, v;
+        planeBasis(n, u, v);
+        count = reduceContactPoints(c.position, c.depth, c.count, u, v, chosen);
+    }
     out.normal = rotate(pose.rotation, n);
     for (int i = 0; i < count; ++i)
         addPoint(out, rotate(pose.rotation, c.position[chosen[i]]) + pose.position, c.depth[chosen[i]],
+                 c.feature[chosen[i]]);
+    return out.pointCount;
+}
+
+/// The same for a kernel whose frame is a posed box (rotation as a matrix).
+int emitReduced(const Candidates& c, Vec3 n, const TriangleBox& box, Manifold& out) {
+    int chosen[4] = {0, 1, 2, 3};
+    int count = c.count;
+    if (count > 4) {
+        Vec3 u, v;
+        planeBasis(n, u, v);
+        count = reduceContactPoints(c.position, c.depth, c.count, u, v, chosen);
+    }
+    out.normal = box.toWorld * n;
+    for (int i = 0; i < count; ++i)
+        addPoint(out, box.toWorld * c.position[chosen[i]] + box.pose.position, c.depth[chosen[i]],
                  c.feature[chosen[i]]);
     return out.pointCount;
 }
@@ -220,9 +264,12 @@ int collideSphereTriangle(Vec3 center, float radius, const TriangleVertices& tri
     const Vec3 b = tri[1] - origin, c = tri[2] - origin, p = center - origin;
     Vec3 faceN;
     if (!faceNormal(b, c, faceN)) return 0;
+    const float reach = radius + margin;
+    const float h = dot(faceN, p);
+    if (beyondReach(h, h, reach, 1.0f)) return 0;
     const TrianglePoint q = closestOnTriangle(p, {}, b, c);
     const Vec3 d = q.point - p;
-    const float dist2 = dot(d, d), reach = radius + margin;
+    const float dist2 = dot(d, d);
     if (!(dist2 <= reach * reach)) return 0;  // also refuses NaN
     // Body to triangle: against the face normal on the centre's side (front when the centre is in the plane).
     const Vec3 toFace = dot(faceN, p) >= 0 ? -faceN : faceN;
@@ -248,6 +295,20 @@ int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices
     const Vec3 center = capsule.center - origin;
     const Vec3 s0 = center - capsule.halfAxis, axis = capsule.halfAxis * 2.0f;
     if (!isFinite(s0) || !isFinite(axis)) return 0;
+    const float reach = radius + margin;
+    const float h0 = dot(faceN, s0), h1 = dot(faceN, s0 + axis);
+    if (beyondReach(h0, h1, reach, 1.0f)) return 0;
+    for (int e = 0; e < 3; ++e) {
+        const Vec3 edge = v[e == 2 ? 0 : e + 1] - v[e], side = cross(edge, faceN);  // outward, |side| = |edge|
+        const float f0 = dot(side, s0 - v[e]), f1 = dot(side, s0 + axis - v[e]);
+        if (f0 > 0 && f1 > 0 && beyondReach(f0, f1, reach, dot(edge, edge))) return 0;
+        // Segment x edge: the whole segment projects to one point, the triangle to [min(0, w), max(0, w)] (w: the
+        // opposite vertex; the edge's own two project to 0).
+        const Vec3 across = cross(axis, edge);
+        const float w = dot(across, v[e == 0 ? 2 : e - 1] - v[e]), at = dot(across, s0 - v[e]);
+        const float gap = at > 0 ? at - std::max(w, 0.0f) : std::min(w, 0.0f) - at;
+        if (gap > 0 && beyondReach(gap, gap, reach, dot(across, across))) return 0;
+    }
 
     // Closest pair: both ends against the triangle, the segment against the edges, the segment through the face.
     struct Pair {
@@ -272,13 +333,11 @@ int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices
         closestSegments(s0, axis, a, edge, s, t);
         consider(s, a + edge * t, t <= 0 ? featureVertex(e) : (t >= 1 ? featureVertex((e + 1) % 3) : featureEdge(e)));
     }
-    const float h0 = dot(faceN, s0), h1 = dot(faceN, s0 + axis);
     if ((h0 < 0) != (h1 < 0) && h0 != h1) {
         const float t = h0 / (h0 - h1);
         const TrianglePoint q = closestOnTriangle(s0 + axis * t, v[0], v[1], v[2]);
         if (q.feature == kFeatureFace) consider(t, q.point, kFeatureFace);
     }
-    const float reach = radius + margin;
     if (!(best.dist2 <= reach * reach)) return 0;
 
     // The face counts on the side of the closest segment point, or of the centre when the segment touches it.
@@ -340,68 +399,103 @@ int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices
 
 // ---- Box --------------------------------------------------------------------------------------------------------
 
+Mat3 rotationMatrix(Quat q) {
+    const float xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
+    const float xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
+    const float wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
+    Mat3 m;
+    m.rows[0] = {1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)};
+    m.rows[1] = {2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)};
+    m.rows[2] = {2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)};
+    return m;
+}
+
+TriangleBox triangleBox(const Transform& pose, Vec3 halfExtents) {
+    TriangleBox box;
+    box.pose = pose;
+    box.halfExtents = halfExtents;
+    box.toWorld = rotationMatrix(pose.rotation);
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) box.toBox(r, c) = box.toWorld(c, r);
+    return box;
+}
+
 int collideBoxTriangle(const Transform& boxPose, Vec3 halfExtents, const TriangleVertices& tri,
                        std::uint8_t activeEdges, float margin, Manifold& out) {
+    return collideBoxTriangle(triangleBox(boxPose, halfExtents), tri, activeEdges, margin, out);
+}
+
+namespace {
+
+/// num / sqrt(len2) > limit for len2 > 0, without the square root (edge axes are tested unnormalised and only the
+/// winner is normalised).
+[[gnu::always_inline]] inline bool exceeds(float num, float limit, float len2) {
+    return limit >= 0 ? num > 0 && num * num > limit * limit * len2 : num >= 0 || num * num < limit * limit * len2;
+}
+
+}  // namespace
+
+int collideBoxTriangle(const TriangleBox& box, const TriangleVertices& tri, std::uint8_t activeEdges, float margin,
+                       Manifold& out) {
     out.pointCount = 0;
     // Box frame, relative to the box centre.
-    const Quat inv = conjugate(boxPose.rotation);
-    const Vec3 t[3] = {rotate(inv, tri[0] - boxPose.position), rotate(inv, tri[1] - boxPose.position),
-                       rotate(inv, tri[2] - boxPose.position)};
+    const Vec3 t[3] = {box.toBox * (tri[0] - box.pose.position), box.toBox * (tri[1] - box.pose.position),
+                       box.toBox * (tri[2] - box.pose.position)};
     Vec3 faceN;
     if (!faceNormal(t[1] - t[0], t[2] - t[0], faceN)) return 0;
-    if (!isFinite(t[0]) || !isFinite(halfExtents)) return 0;
-    const Vec3 h = halfExtents;
+    const Vec3 h = box.halfExtents;
+    if (!isFinite(t[0]) || !isFinite(h)) return 0;
+
+    auto boxRadius = [&](Vec3 L) { return std::abs(L.x) * h.x + std::abs(L.y) * h.y + std::abs(L.z) * h.z; };
+    enum class Axis { TriangleFace, BoxFace, EdgeEdge };
+    Axis kind = Axis::TriangleFace;
+    int boxAxis = 0, triEdge = 0;
+    // The triangle face counts on the side of the box centre (two-sided triangles). Tested first: it is the axis
+    // that separates most of the triangles a body's bounds overlap.
+    const Vec3 toFace = dot(faceN, -t[0]) >= 0 ? -faceN : faceN;
+    float best = dot(toFace, t[0]) - boxRadius(toFace);
+    if (best > margin) return 0;
     const Vec3 edges[3] = {t[1] - t[0], t[2] - t[1], t[0] - t[2]};
     const float size =
         std::max({h.x, h.y, h.z,
                   std::sqrt(std::max({dot(edges[0], edges[0]), dot(edges[1], edges[1]), dot(edges[2], edges[2])}))});
-
-    auto boxRadius = [&](Vec3 L) { return std::abs(L.x) * h.x + std::abs(L.y) * h.y + std::abs(L.z) * h.z; };
-    // Separation along L and the direction (box to triangle) that achieves it.
-    auto separation = [&](Vec3 L, Vec3& dir) {
-        const float p0 = dot(L, t[0]), p1 = dot(L, t[1]), p2 = dot(L, t[2]);
-        const float lo = std::min({p0, p1, p2}), hi = std::max({p0, p1, p2}), r = boxRadius(L);
-        const float pos = lo - r, neg = -hi - r;
-        dir = pos >= neg ? L : -L;
-        return std::max(pos, neg);
-    };
-
-    enum class Axis { TriangleFace, BoxFace, EdgeEdge };
-    Axis kind = Axis::TriangleFace;
-    int boxAxis = 0, triEdge = 0;
-    // The triangle face counts on the side of the box centre (two-sided triangles).
-    const Vec3 toFace = dot(faceN, -t[0]) >= 0 ? -faceN : faceN;
-    float best = dot(toFace, t[0]) - boxRadius(toFace);
-    if (best > margin) return 0;
     Vec3 n = toFace;
-    auto better = [&](float sep) {
-        return sep > best + kAxisRelativeTolerance * std::abs(best) + kAxisAbsoluteTolerance * size;
-    };
+    auto threshold = [&] { return best + kAxisRelativeTolerance * std::abs(best) + kAxisAbsoluteTolerance * size; };
     for (int k = 0; k < 3; ++k) {
-        Vec3 dir;
-        const float sep = separation(axisVector(k, 1), dir);
+        const float p0 = component(t[0], k), p1 = component(t[1], k), p2 = component(t[2], k);
+        const float hk = component(h, k);
+        const float pos = std::min({p0, p1, p2}) - hk, neg = -std::max({p0, p1, p2}) - hk;
+        const float sep = std::max(pos, neg);
         if (sep > margin) return 0;
-        if (better(sep)) best = sep, n = dir, kind = Axis::BoxFace, boxAxis = k;
+        if (sep > threshold())
+            best = sep, n = axisVector(k, pos >= neg ? 1.0f : -1.0f), kind = Axis::BoxFace, boxAxis = k;
     }
     // Of an edge axis only the direction in which triangle edge j is the triangle's support towards the box (where
     // the pair makes a face of the Minkowski difference: -dir on the half circle of the triangle's Gauss map through
     // edge j's outward side) can be the contact's; the box edge along i supports every direction orthogonal to i.
     // The other direction still proves separation, but its edge points are not the contact, and taking it dropped
-    // or under-reported deep contacts.
+    // or under-reported deep contacts. The axes are tested unnormalised (axis e_i x edge_j has length len): a
+    // separation num / len exceeds a limit when num > limit * len, compared squared, so only an axis that wins is
+    // normalised.
+    Vec3 sides[3];
+    for (int j = 0; j < 3; ++j) sides[j] = cross(edges[j], faceN);  // outward: t is counter-clockwise about faceN
+    constexpr float kParallel2 = kTriangleEdgeParallelEpsilon * kTriangleEdgeParallelEpsilon;
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
-            Vec3 L = cross(axisVector(i, 1), edges[j]);
+            const Vec3 e = edges[j];
+            const Vec3 L = i == 0 ? Vec3{0, -e.z, e.y} : (i == 1 ? Vec3{e.z, 0, -e.x} : Vec3{-e.y, e.x, 0});
             const float len2 = dot(L, L);
-            if (len2 <= kTriangleEdgeParallelEpsilon * kTriangleEdgeParallelEpsilon * dot(edges[j], edges[j])) continue;
-            L = L / std::sqrt(len2);
-            Vec3 dir;
-            if (separation(L, dir) > margin) return 0;
-            const float side = dot(L, cross(edges[j], faceN));  // outward side of edge j: t is counter-clockwise
+            if (len2 <= kParallel2 * dot(e, e)) continue;
+            const float p0 = dot(L, t[0]), p1 = dot(L, t[1]), p2 = dot(L, t[2]);
+            const float r = boxRadius(L);
+            const float pos = std::min({p0, p1, p2}) - r, neg = -std::max({p0, p1, p2}) - r;
+            if (exceeds(std::max(pos, neg), margin, len2)) return 0;
+            const float side = dot(L, sides[j]);
             if (side == 0) continue;
-            dir = side < 0 ? L : -L;
-            const float lo = std::min({dot(dir, t[0]), dot(dir, t[1]), dot(dir, t[2])});
-            const float sep = lo - boxRadius(dir);
-            if (better(sep)) best = sep, n = dir, kind = Axis::EdgeEdge, boxAxis = i, triEdge = j;
+            const float sepU = side < 0 ? pos : neg;
+            if (!exceeds(sepU, threshold(), len2)) continue;
+            const float inv = 1.0f / std::sqrt(len2);
+            best = sepU * inv, n = (side < 0 ? L : -L) * inv, kind = Axis::EdgeEdge, boxAxis = i, triEdge = j;
         }
     }
 
@@ -428,17 +522,14 @@ int collideBoxTriangle(const Transform& boxPose, Vec3 halfExtents, const Triangl
         poly[1] = {withComponents(k, s * hk, u, -hu, w, hw), 1, 1};
         poly[2] = {withComponents(k, s * hk, u, -hu, w, -hw), 2, 2};
         poly[3] = {withComponents(k, s * hk, u, hu, w, -hw), 3, 3};
-        Vec3 sides[3];
         float offsets[3];
-        for (int e = 0; e < 3; ++e) {
-            sides[e] = cross(edges[e], faceN);  // outward: t is counter-clockwise about faceN
-            offsets[e] = dot(sides[e], t[e]);
-        }
-        const int m = clipAgainst(poly, 4, sides, offsets, 3);
+        for (int e = 0; e < 3; ++e) offsets[e] = dot(sides[e], t[e]);
+        int m = 4;
+        const ClipVertex* clipped = clipAgainst(poly, m, sides, offsets, 3);
         const std::uint32_t face = std::uint32_t(2 * k + (s < 0 ? 1 : 0));
         for (int i = 0; i < m; ++i) {
-            const float depth = dot(poly[i].p - t[0], n);
-            if (depth >= -margin) cands.add(poly[i].p - n * depth, depth, face << 16 | poly[i].id);
+            const float depth = dot(clipped[i].p - t[0], n);
+            if (depth >= -margin) cands.add(clipped[i].p - n * depth, depth, face << 16 | clipped[i].id);
         }
         if (cands.count == 0) {
             // The face lies beside the triangle while a corner reaches it: that corner (the deepest) alone.
@@ -454,13 +545,14 @@ int collideBoxTriangle(const Transform& boxPose, Vec3 halfExtents, const Triangl
         const float s = component(n, k) < 0 ? -1.0f : 1.0f;
         ClipVertex* poly = sc.poly;
         for (int i = 0; i < 3; ++i) poly[i] = {t[i], std::uint16_t(i), std::uint16_t(i)};
-        const Vec3 sides[4] = {axisVector(u, 1), axisVector(u, -1), axisVector(w, 1), axisVector(w, -1)};
+        const Vec3 planes[4] = {axisVector(u, 1), axisVector(u, -1), axisVector(w, 1), axisVector(w, -1)};
         const float offsets[4] = {component(h, u), component(h, u), component(h, w), component(h, w)};
-        const int m = clipAgainst(poly, 3, sides, offsets, 4);
+        int m = 3;
+        const ClipVertex* clipped = clipAgainst(poly, m, planes, offsets, 4);
         const std::uint32_t face = std::uint32_t(2 * k + (s < 0 ? 1 : 0));
         for (int i = 0; i < m; ++i) {
-            const float depth = component(h, k) - s * component(poly[i].p, k);
-            if (depth >= -margin) cands.add(poly[i].p, depth, 1u << 30 | face << 16 | poly[i].id);
+            const float depth = component(h, k) - s * component(clipped[i].p, k);
+            if (depth >= -margin) cands.add(clipped[i].p, depth, 1u << 30 | face << 16 | clipped[i].id);
         }
         if (cands.count == 0) {
             // The triangle lies beside the face while one of its vertices reaches it: that vertex (the deepest).
@@ -485,7 +577,7 @@ int collideBoxTriangle(const Transform& boxPose, Vec3 halfExtents, const Triangl
         if (depth >= -margin) cands.add(onTri, depth, 2u << 30 | boxEdge << 8 | std::uint32_t(triEdge));
     }
     if (cands.count == 0) return 0;
-    return emitReduced(cands, n, boxPose, out);
+    return emitReduced(cands, n, box, out);
 }
 
 // ---- Hull -------------------------------------------------------------------------------------------------------
@@ -614,11 +706,11 @@ int collideHullTriangle(const ConvexHull& hull, const HullAdjacency& adjacency, 
             poly[m] = {V[hull.faceVertices[k]], static_cast<std::uint16_t>(m), static_cast<std::uint16_t>(m)};
         float sideOffsets[3];
         for (int j = 0; j < 3; ++j) sideOffsets[j] = dot(sides[j], t[j]) + kClipSlack * size * length(sides[j]);
-        m = clipAgainst(poly, m, sides, sideOffsets, 3);
+        const ClipVertex* clipped = clipAgainst(poly, m, sides, sideOffsets, 3);
         const std::uint32_t face = (static_cast<std::uint32_t>(fi) & 0x3FFFu) << 16;
         for (int k = 0; k < m; ++k) {
-            const float depth = dot(poly[k].p - t[0], n);
-            if (depth >= -margin) cands.add(poly[k].p - n * depth, depth, face | poly[k].id);
+            const float depth = dot(clipped[k].p - t[0], n);
+            if (depth >= -margin) cands.add(clipped[k].p - n * depth, depth, face | clipped[k].id);
         }
         if (cands.count == 0) {
             // Nothing of the face lies over the triangle within the margin while the hull reaches it: the deepest
@@ -641,11 +733,12 @@ int collideHullTriangle(const ConvexHull& hull, const HullAdjacency& adjacency, 
         }
         ClipVertex* poly = sc.poly;
         for (int i = 0; i < 3; ++i) poly[i] = {t[i], std::uint16_t(i), std::uint16_t(i)};
-        const int m = clipAgainst(poly, 3, normals, planeOffsets, planes);
+        int m = 3;
+        const ClipVertex* clipped = clipAgainst(poly, m, normals, planeOffsets, planes);
         const std::uint32_t face = 1u << 30 | (static_cast<std::uint32_t>(hullFace) & 0x3FFFu) << 16;
         for (int k = 0; k < m; ++k) {
-            const float depth = offsets[hullFace] - dot(n, poly[k].p);
-            if (depth >= -margin) cands.add(poly[k].p, depth, face | poly[k].id);
+            const float depth = offsets[hullFace] - dot(n, clipped[k].p);
+            if (depth >= -margin) cands.add(clipped[k].p, depth, face | clipped[k].id);
         }
         if (cands.count == 0) {
             // The triangle lies beside the face while one of its vertices reaches it: that vertex (the deepest).

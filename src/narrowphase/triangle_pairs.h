@@ -99,6 +99,21 @@ int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices
 int collideBoxTriangle(const Transform& boxPose, Vec3 halfExtents, const TriangleVertices& tri,
                        std::uint8_t activeEdges, float margin, Manifold& out);
 
+/// A box posed once for all the triangles it meets: its rotation as matrices both ways (the kernel moves each
+/// triangle into the box frame and the contacts back).
+struct TriangleBox {
+    Transform pose;
+    Mat3 toWorld;  ///< columns: the box axes in the world
+    Mat3 toBox;    ///< transpose of toWorld
+    Vec3 halfExtents;
+};
+TriangleBox triangleBox(const Transform& pose, Vec3 halfExtents);
+/// The rotation of a unit quaternion as a matrix (columns: the rotated axes).
+Mat3 rotationMatrix(Quat q);
+/// The same kernel for a box made by triangleBox.
+int collideBoxTriangle(const TriangleBox& box, const TriangleVertices& tri, std::uint8_t activeEdges, float margin,
+                       Manifold& out);
+
 /// Hull A (posed by `hullPose`, with its adjacency from buildHullAdjacency in hull_pairs.h) against triangle B.
 /// Returns 0 to 4.
 int collideHullTriangle(const ConvexHull& hull, const HullAdjacency& adjacency, const Transform& hullPose,

@@ -596,19 +596,22 @@ TEST(BoxBox, BatchedGivesExactlyThePerPairManifolds) {
                                   bs[k].half.y,          bs[k].half.z,          margins[k]};
         for (int f = 0; f < 21; ++f) soa[f].push_back(values[f]);
     }
+    for (auto& field : soa) field.resize(field.size() + 16, field.back());  // readable past the end (padded)
     const BoxPairs in{soa[0].data(),  soa[1].data(),  soa[2].data(),  soa[3].data(),  soa[4].data(),  soa[5].data(),
                       soa[6].data(),  soa[7].data(),  soa[8].data(),  soa[9].data(),  soa[10].data(), soa[11].data(),
                       soa[12].data(), soa[13].data(), soa[14].data(), soa[15].data(), soa[16].data(), soa[17].data(),
                       soa[18].data(), soa[19].data(), soa[20].data()};
     int contacts = 0, edges = 0, separated = 0;
     for (const std::size_t n : {as.size(), std::size_t{37}, std::size_t{5}}) {
-        std::vector<Manifold> batched(n), scalar(n);
+        // Padded: the arrays go on past n, so the tail may run in lanes too.
+        std::vector<Manifold> batched(n), scalar(n), padded(n);
         collideBoxesBatch(in, n, batched.data());
         collideBoxesBatchScalar(in, n, scalar.data());
+        collideBoxesBatch(in, n, padded.data(), nullptr, /*padded=*/true);
         for (std::size_t k = 0; k < n; ++k) {
             Manifold one;
             collideBoxes(as[k].pose, as[k].half, bs[k].pose, bs[k].half, margins[k], one);
-            for (const Manifold* m : {&batched[k], &scalar[k]}) {
+            for (const Manifold* m : {&batched[k], &scalar[k], &padded[k]}) {
                 ASSERT_EQ(m->pointCount, one.pointCount) << "pair " << k;
                 if (one.pointCount == 0) continue;
                 EXPECT_EQ(std::memcmp(&m->normal, &one.normal, sizeof(Vec3)), 0) << "pair " << k;

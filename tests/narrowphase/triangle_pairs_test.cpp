@@ -469,6 +469,44 @@ TEST(TrianglePairs, CapsuleMatchesLibccd) {
     EXPECT_GT(compared, 500);
 }
 
+// The sphere and capsule kernels first reject triangles out of reach by a few separating planes (face, edge sides,
+// segment x edge) before their closest-point search. Near the edge of the reach, a contact must come out exactly
+// when the distance (double precision, the segment densely sampled: the distance is 1-Lipschitz along it, so the
+// sampled minimum is within half a sample spacing of the true one) is within radius + margin. Tolerance 1e-4 m
+// beyond the sampling bound: the kernels' float rounding on coordinates of about 1 m is far below it, a wrongly
+// placed plane is far above it.
+TEST(TrianglePairs, SphereAndCapsuleGiveContactsExactlyWithinReach) {
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<float> u(0, 1);
+    constexpr int kSamples = 800;
+    constexpr double kTolerance = 1e-4;
+    int touching = 0, apart = 0;
+    for (int i = 0; i < 6000; ++i) {
+        const TriangleVertices tri = randomTriangle(rng);
+        const float r = 0.1f + 0.4f * u(rng), margin = 0.05f * u(rng);
+        const float hh = i % 4 == 0 ? 0.0f : 0.6f * u(rng);  // every fourth a sphere
+        const Vec3 c = randomPointOn(tri, rng) + randomUnit(rng) * ((r + hh + margin) * 1.3f * u(rng));
+        const CapsuleSegment cap = capsuleSegmentOf({c, randomRotation(rng)}, hh, r);
+        double upper = INFINITY;
+        for (int k = 0; k <= kSamples; ++k)
+            upper = std::min(upper, distanceToTriangle(cap.center + cap.halfAxis * (2.0f * k / kSamples - 1.0f), tri));
+        const double lower = upper - length(cap.halfAxis) / kSamples;
+        const double reach = double(r) + margin;
+        Manifold m;
+        const int count = hh == 0 ? collideSphereTriangle(c, r, tri, kAll, margin, m)
+                                  : collideCapsuleTriangle(cap, tri, kAll, margin, m);
+        if (upper < reach - kTolerance) {
+            ++touching;
+            EXPECT_GT(count, 0) << "case " << i << ": distance " << upper << " within reach " << reach;
+        } else if (lower > reach + kTolerance) {
+            ++apart;
+            EXPECT_EQ(count, 0) << "case " << i << ": distance " << lower << " beyond reach " << reach;
+        }
+    }
+    EXPECT_GT(touching, 1000);
+    EXPECT_GT(apart, 1000);
+}
+
 TEST(TrianglePairs, BoxMatchesLibccd) {
     std::mt19937 rng(13);
     std::uniform_real_distribution<float> u(0, 1);
