@@ -12,6 +12,7 @@
 
 namespace {
 
+using rubble::detail::BodyRow;
 using rubble::detail::BodyRows;
 using rubble::detail::ContactBatch;
 using rubble::detail::kBatchLanes;
@@ -21,7 +22,7 @@ constexpr std::size_t kManifolds = 20000;
 
 struct Problem {
     std::vector<ContactBatch> batches;
-    std::vector<float> rows[18];
+    std::vector<BodyRow> velocity, motion, pseudo;
 
     Problem() {
         std::mt19937 rng(42);
@@ -29,18 +30,15 @@ struct Problem {
         std::uniform_int_distribution<std::int32_t> first(0, kBodies - 2 * static_cast<std::int32_t>(kBatchLanes));
         for (ContactBatch& b : batches) rubble::test::fillRandomBatch(b, rng, kBodies, first(rng));
         std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-        for (auto& r : rows) {
-            r.resize(kBodies + 2);
-            for (float& x : r) x = 0.01f * u(rng);
-            r[kBodies] = 0.0f;
+        for (auto* rows : {&velocity, &motion, &pseudo}) {
+            rows->resize(kBodies + 2);
+            for (BodyRow& r : *rows)
+                r = {{0.01f * u(rng), 0.01f * u(rng), 0.01f * u(rng)},
+                     {0.01f * u(rng), 0.01f * u(rng), 0.01f * u(rng)}};
+            (*rows)[kBodies] = BodyRow{};  // the still row
         }
     }
-    BodyRows bodyRows() {
-        return {rows[0].data(),  rows[1].data(),  rows[2].data(),  rows[3].data(),  rows[4].data(),
-                rows[5].data(),  rows[6].data(),  rows[7].data(),  rows[8].data(),  rows[9].data(),
-                rows[10].data(), rows[11].data(), rows[12].data(), rows[13].data(), rows[14].data(),
-                rows[15].data(), rows[16].data(), rows[17].data(), kBodies + 1};
-    }
+    BodyRows bodyRows() { return {velocity.data(), motion.data(), pseudo.data(), kBodies + 1}; }
 };
 
 void BM_ContactSolveWide(benchmark::State& state) {
