@@ -100,9 +100,10 @@ struct RowW {
     Vec3W<F> linear, angular;
 };
 
-/// Rows index[k] for the lanesOf<F> indices at `index`.
+/// Rows index[k] for the lanesOf<F> indices at `index`. (Inlined by force: GCC otherwise calls it, and the six
+/// wide vectors make a round trip through memory.)
 template <class F>
-RowW<F> loadRows(const BodyRow* rows, const std::int32_t* index) {
+[[gnu::always_inline]] inline RowW<F> loadRows(const BodyRow* rows, const std::int32_t* index) {
     F c[simd::kRowFloats];
     simd::loadRowsTransposed(reinterpret_cast<const float*>(rows), index, c);
     return {{c[0], c[1], c[2]}, {c[3], c[4], c[5]}};
@@ -110,7 +111,8 @@ RowW<F> loadRows(const BodyRow* rows, const std::int32_t* index) {
 
 /// Writes rows index[k] whole (pad zeroed); with repeated indices the highest lane wins.
 template <class F>
-void storeRows(BodyRow* rows, const IndexOf<F>& index, const Vec3W<F>& linear, const Vec3W<F>& angular) {
+[[gnu::always_inline]] inline void storeRows(BodyRow* rows, const IndexOf<F>& index, const Vec3W<F>& linear,
+                                             const Vec3W<F>& angular) {
     const F zero(0.0f);
     const F c[simd::kRowFloats] = {linear.x, linear.y, linear.z, angular.x, angular.y, angular.z, zero, zero};
     simd::storeRowsTransposed(reinterpret_cast<float*>(rows), index, c);
