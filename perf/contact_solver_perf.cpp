@@ -1,6 +1,8 @@
 // Contact solver kernels: manifolds solved per second by one velocity iteration, the wide kernels (a batch of
 // simd::kLanes manifolds per call) against the one-lane scalar kernels over the same rows. 20,000 manifolds over
-// 3,000 bodies, about S1's size, so that body rows are gathered from memory the way the real solve meets them.
+// 3,000 bodies, about S1's size, so that body rows are fetched from memory the way the real solve meets them.
+// BodyRows* compare the two ways of moving a batch's body velocities in and out of lanes: gathers and scatters over
+// six SoA arrays (the layout before), and whole AoS rows through simd/transpose.h (the layout now).
 // Whole-scene solver time at 1 and 2 threads is in scenes_perf.cpp (the solver_ms counter).
 #include <benchmark/benchmark.h>
 
@@ -67,5 +69,51 @@ void BM_ContactSolveScalar(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p.batches.size() * kBatchLanes));
 }
 BENCHMARK(BM_ContactSolveScalar)->Unit(benchmark::kMicrosecond);
+
+// Each batch: load bodies A and B, nudge them, store them back (what Pair does around a kernel's arithmetic).
+void BM_BodyRowsGatherScatterSoA(benchmark::State& state) {
+    using rubble::simd::FloatW;
+    using rubble::simd::IntW;
+    Problem p;
+    std::vector<float> soa[6];
+    for (std::size_t c = 0; c < 6; ++c) {
+        soa[c].resize(p.velocity.size());
+        for (std::size_t i = 0; i < p.velocity.size(); ++i)
+            soa[c][i] = c < 3 ? (&p.velocity[i].linear.x)[c] : (&p.velocity[i].angular.x)[c - 3];
+    }
+    const FloatW nudge(1e-7f);
+    for (auto _ : state) {
+        for (const ContactBatch& b : p.batches)
+            for (const std::int32_t* body : {b.bodyA, b.bodyB}) {
+                const IntW index = rubble::simd::loadInt<IntW>(body);
+                FloatW v[6];
+                for (std::size_t c = 0; c < 6; ++c) v[c] = rubble::simd::gather(soa[c].data(), index) + nudge;
+                for (std::size_t c = 0; c < 6; ++c) rubble::simd::scatter(soa[c].data(), index, v[c]);
+            }
+        benchmark::ClobberMemory();
+    }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p.batches.size() * kBatchLanes));
+}
+BENCHMARK(BM_BodyRowsGatherScatterSoA)->Unit(benchmark::kMicrosecond);
+
+void BM_BodyRowsTransposeAoS(benchmark::State& state) {
+    using rubble::simd::FloatW;
+    using rubble::simd::IntW;
+    Problem p;
+    float* rows = reinterpret_cast<float*>(p.velocity.data());
+    const FloatW nudge(1e-7f);
+    for (auto _ : state) {
+        for (const ContactBatch& b : p.batches)
+            for (const std::int32_t* body : {b.bodyA, b.bodyB}) {
+                FloatW v[rubble::simd::kRowFloats];
+                rubble::simd::loadRowsTransposed(rows, body, v);
+                for (std::size_t c = 0; c < 6; ++c) v[c] = v[c] + nudge;
+                rubble::simd::storeRowsTransposed(rows, rubble::simd::loadInt<IntW>(body), v);
+            }
+        benchmark::ClobberMemory();
+    }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p.batches.size() * kBatchLanes));
+}
+BENCHMARK(BM_BodyRowsTransposeAoS)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
