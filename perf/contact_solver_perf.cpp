@@ -1,6 +1,8 @@
 // Contact solver kernels: manifolds solved per second by one velocity iteration, the wide kernels (a batch of
 // simd::kLanes manifolds per call) against the one-lane scalar kernels over the same rows. 20,000 manifolds over
-// 3,000 bodies, about S1's size, so that body rows are gathered from memory the way the real solve meets them.
+// 3,000 bodies, about S1's size, so that body rows are fetched from memory the way the real solve meets them.
+// BodyRows* compare the two ways of moving a batch's body velocities in and out of lanes: gathers and scatters over
+// six SoA arrays (the layout before), and whole AoS rows through simd/transpose.h (the layout now).
 // Whole-scene solver time at 1 and 2 threads is in scenes_perf.cpp (the solver_ms counter).
 #include <benchmark/benchmark.h>
 
@@ -12,6 +14,7 @@
 
 namespace {
 
+using rubble::detail::BodyRow;
 using rubble::detail::BodyRows;
 using rubble::detail::ContactBatch;
 using rubble::detail::kBatchLanes;
@@ -21,7 +24,7 @@ constexpr std::size_t kManifolds = 20000;
 
 struct Problem {
     std::vector<ContactBatch> batches;
-    std::vector<float> rows[18];
+    std::vector<BodyRow> velocity, motion, pseudo;
 
     Problem() {
         std::mt19937 rng(42);
@@ -29,18 +32,15 @@ struct Problem {
         std::uniform_int_distribution<std::int32_t> first(0, kBodies - 2 * static_cast<std::int32_t>(kBatchLanes));
         for (ContactBatch& b : batches) rubble::test::fillRandomBatch(b, rng, kBodies, first(rng));
         std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-        for (auto& r : rows) {
-            r.resize(kBodies + 2);
-            for (float& x : r) x = 0.01f * u(rng);
-            r[kBodies] = 0.0f;
+        for (auto* rows : {&velocity, &motion, &pseudo}) {
+            rows->resize(kBodies + 2);
+            for (BodyRow& r : *rows)
+                r = {{0.01f * u(rng), 0.01f * u(rng), 0.01f * u(rng)},
+                     {0.01f * u(rng), 0.01f * u(rng), 0.01f * u(rng)}};
+            (*rows)[kBodies] = BodyRow{};  // the still row
         }
     }
-    BodyRows bodyRows() {
-        return {rows[0].data(),  rows[1].data(),  rows[2].data(),  rows[3].data(),  rows[4].data(),
-                rows[5].data(),  rows[6].data(),  rows[7].data(),  rows[8].data(),  rows[9].data(),
-                rows[10].data(), rows[11].data(), rows[12].data(), rows[13].data(), rows[14].data(),
-                rows[15].data(), rows[16].data(), rows[17].data(), kBodies + 1};
-    }
+    BodyRows bodyRows() { return {velocity.data(), motion.data(), pseudo.data(), kBodies + 1}; }
 };
 
 void BM_ContactSolveWide(benchmark::State& state) {
@@ -69,5 +69,51 @@ void BM_ContactSolveScalar(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p.batches.size() * kBatchLanes));
 }
 BENCHMARK(BM_ContactSolveScalar)->Unit(benchmark::kMicrosecond);
+
+// Each batch: load bodies A and B, nudge them, store them back (what Pair does around a kernel's arithmetic).
+void BM_BodyRowsGatherScatterSoA(benchmark::State& state) {
+    using rubble::simd::FloatW;
+    using rubble::simd::IntW;
+    Problem p;
+    std::vector<float> soa[6];
+    for (std::size_t c = 0; c < 6; ++c) {
+        soa[c].resize(p.velocity.size());
+        for (std::size_t i = 0; i < p.velocity.size(); ++i)
+            soa[c][i] = c < 3 ? (&p.velocity[i].linear.x)[c] : (&p.velocity[i].angular.x)[c - 3];
+    }
+    const FloatW nudge(1e-7f);
+    for (auto _ : state) {
+        for (const ContactBatch& b : p.batches)
+            for (const std::int32_t* body : {b.bodyA, b.bodyB}) {
+                const IntW index = rubble::simd::loadInt<IntW>(body);
+                FloatW v[6];
+                for (std::size_t c = 0; c < 6; ++c) v[c] = rubble::simd::gather(soa[c].data(), index) + nudge;
+                for (std::size_t c = 0; c < 6; ++c) rubble::simd::scatter(soa[c].data(), index, v[c]);
+            }
+        benchmark::ClobberMemory();
+    }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p.batches.size() * kBatchLanes));
+}
+BENCHMARK(BM_BodyRowsGatherScatterSoA)->Unit(benchmark::kMicrosecond);
+
+void BM_BodyRowsTransposeAoS(benchmark::State& state) {
+    using rubble::simd::FloatW;
+    using rubble::simd::IntW;
+    Problem p;
+    float* rows = reinterpret_cast<float*>(p.velocity.data());
+    const FloatW nudge(1e-7f);
+    for (auto _ : state) {
+        for (const ContactBatch& b : p.batches)
+            for (const std::int32_t* body : {b.bodyA, b.bodyB}) {
+                FloatW v[rubble::simd::kRowFloats];
+                rubble::simd::loadRowsTransposed(rows, body, v);
+                for (std::size_t c = 0; c < 6; ++c) v[c] = v[c] + nudge;
+                rubble::simd::storeRowsTransposed(rows, rubble::simd::loadInt<IntW>(body), v);
+            }
+        benchmark::ClobberMemory();
+    }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p.batches.size() * kBatchLanes));
+}
+BENCHMARK(BM_BodyRowsTransposeAoS)->Unit(benchmark::kMicrosecond);
 
 }  // namespace

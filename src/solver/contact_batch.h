@@ -2,9 +2,11 @@
 // A batch of contact constraints, one manifold per SIMD lane, and the solver kernels over it. The kernels are
 // written once over a lane type F: FloatW runs a whole batch per call, float runs one lane (the scalar reference
 // the tests compare the wide kernels with, and that perf/ measures them against).
+#include <cstddef>
 #include <cstdint>
 
 #include "narrowphase/manifold.h"
+#include "simd/transpose.h"
 #include "simd/vec.h"
 
 namespace rubble::detail {
@@ -41,11 +43,22 @@ struct alignas(64) ContactBatch {
     } points[kMaxManifoldPoints];
 };
 
-/// Row pointers of SolverBodies, with the scratch row this worker may write.
+/// One body's row in the solver's working set: a linear and an angular 3-vector (velocity, motion since prepare(),
+/// or split impulses' pseudo-velocity), padded to 32 bytes so that the wide kernels load and store whole rows and
+/// transpose them into lanes (simd/transpose.h) instead of gathering six arrays. The pad holds no meaning.
+struct alignas(32) BodyRow {
+    Vec3 linear;
+    Vec3 angular;
+    float pad[2] = {0, 0};
+};
+static_assert(sizeof(BodyRow) == simd::kRowFloats * sizeof(float) && offsetof(BodyRow, angular) == 3 * sizeof(float),
+              "a body row is eight floats: the transposes read it as such");
+
+/// Row arrays of SolverBodies, with the scratch row this worker may write.
 struct BodyRows {
-    float *vx, *vy, *vz, *wx, *wy, *wz;
-    const float *dpx, *dpy, *dpz, *dax, *day, *daz;
-    float *pvx, *pvy, *pvz, *pwx, *pwy, *pwz;
+    BodyRow* velocity;
+    const BodyRow* motion;
+    BodyRow* pseudo;
     std::int32_t scratchRow;
 };
 
@@ -81,16 +94,28 @@ void put(float* lanes, std::size_t lane, const F& v) {
     simd::store(lanes + lane, v);
 }
 
+/// The linear and angular parts of a row, in lanes.
 template <class F>
-Vec3W<F> gather3(const float* x, const float* y, const float* z, const IndexOf<F>& index) {
-    return {simd::gather(x, index), simd::gather(y, index), simd::gather(z, index)};
+struct RowW {
+    Vec3W<F> linear, angular;
+};
+
+/// Rows index[k] for the lanesOf<F> indices at `index`. (Inlined by force: GCC otherwise calls it, and the six
+/// wide vectors make a round trip through memory.)
+template <class F>
+[[gnu::always_inline]] inline RowW<F> loadRows(const BodyRow* rows, const std::int32_t* index) {
+    F c[simd::kRowFloats];
+    simd::loadRowsTransposed(reinterpret_cast<const float*>(rows), index, c);
+    return {{c[0], c[1], c[2]}, {c[3], c[4], c[5]}};
 }
 
+/// Writes rows index[k] whole (pad zeroed); with repeated indices the highest lane wins.
 template <class F>
-void scatter3(float* x, float* y, float* z, const IndexOf<F>& index, const Vec3W<F>& v) {
-    simd::scatter(x, index, v.x);
-    simd::scatter(y, index, v.y);
-    simd::scatter(z, index, v.z);
+[[gnu::always_inline]] inline void storeRows(BodyRow* rows, const IndexOf<F>& index, const Vec3W<F>& linear,
+                                             const Vec3W<F>& angular) {
+    const F zero(0.0f);
+    const F c[simd::kRowFloats] = {linear.x, linear.y, linear.z, angular.x, angular.y, angular.z, zero, zero};
+    simd::storeRowsTransposed(reinterpret_cast<float*>(rows), index, c);
 }
 
 template <class F>
@@ -113,8 +138,7 @@ struct Pair {
     F mA, mB;
     simd::SymMat3W<F> iA, iB;
 
-    Pair(const ContactBatch& b, std::size_t lane, const float* vx, const float* vy, const float* vz, const float* wx,
-         const float* wy, const float* wz, std::int32_t scratchRow) {
+    Pair(const ContactBatch& b, std::size_t lane, const BodyRow* rows, std::int32_t scratchRow) {
         readA = simd::loadInt<IndexOf<F>>(b.bodyA + lane);
         readB = simd::loadInt<IndexOf<F>>(b.bodyB + lane);
         mA = at<F>(b.invMassA, lane);
@@ -122,20 +146,17 @@ struct Pair {
         const IndexOf<F> scratch(scratchRow);
         writeA = simd::select(mA > F(0.0f), readA, scratch);
         writeB = simd::select(mB > F(0.0f), readB, scratch);
-        vA = gather3<F>(vx, vy, vz, readA);
-        wA = gather3<F>(wx, wy, wz, readA);
-        vB = gather3<F>(vx, vy, vz, readB);
-        wB = gather3<F>(wx, wy, wz, readB);
+        const RowW<F> a = loadRows<F>(rows, b.bodyA + lane), c = loadRows<F>(rows, b.bodyB + lane);
+        vA = a.linear, wA = a.angular;
+        vB = c.linear, wB = c.angular;
         iA = inertiaA<F>(b, lane);
         iB = inertiaB<F>(b, lane);
     }
 
-    void store(float* vx, float* vy, float* vz, float* wx, float* wy, float* wz) const {
+    void store(BodyRow* rows) const {
         // A before B: when both are the scratch row the value written there does not matter.
-        scatter3<F>(vx, vy, vz, writeA, vA);
-        scatter3<F>(wx, wy, wz, writeA, wA);
-        scatter3<F>(vx, vy, vz, writeB, vB);
-        scatter3<F>(wx, wy, wz, writeB, wB);
+        storeRows<F>(rows, writeA, vA, wA);
+        storeRows<F>(rows, writeB, vB, wB);
     }
 
     Vec3W<F> relativeVelocity(const Vec3W<F>& rA, const Vec3W<F>& rB) const {
@@ -162,7 +183,7 @@ Vec3W<F> anchorB(const ContactBatch::Point& p, std::size_t lane) {
 /// Applies the accumulated impulses of every point.
 template <class F>
 void warmStart(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
-    Pair<F> pair(b, lane, rows.vx, rows.vy, rows.vz, rows.wx, rows.wy, rows.wz, rows.scratchRow);
+    Pair<F> pair(b, lane, rows.velocity, rows.scratchRow);
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
     const Vec3W<F> t1 = at3<F>(b.t1x, b.t1y, b.t1z, lane);
     const Vec3W<F> t2 = at3<F>(b.t2x, b.t2y, b.t2z, lane);
@@ -171,7 +192,7 @@ void warmStart(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
                                  t2 * at<F>(p.tangentImpulse2, lane);
         pair.apply(anchorA<F>(p, lane), anchorB<F>(p, lane), impulse);
     }
-    pair.store(rows.vx, rows.vy, rows.vz, rows.wx, rows.wy, rows.wz);
+    pair.store(rows.velocity);
 }
 
 /// Current separation of a point: at prepare() plus the bodies' motion since, the rotation linearised (the
@@ -187,7 +208,7 @@ F separation(const ContactBatch::Point& p, std::size_t lane, const Vec3W<F>& n, 
 /// normal impulses, Gauss-Seidel within the manifold.
 template <class F, bool Friction>
 void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveParams& params) {
-    Pair<F> pair(b, lane, rows.vx, rows.vy, rows.vz, rows.wx, rows.wy, rows.wz, rows.scratchRow);
+    Pair<F> pair(b, lane, rows.velocity, rows.scratchRow);
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
     if constexpr (Friction) {
         const Vec3W<F> t1 = at3<F>(b.t1x, b.t1y, b.t1z, lane);
@@ -213,10 +234,9 @@ void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveP
     }
     Vec3W<F> dpA = Vec3W<F>::zero(), daA = dpA, dpB = dpA, daB = dpA;
     if (params.moved) {
-        dpA = gather3<F>(rows.dpx, rows.dpy, rows.dpz, pair.readA);
-        daA = gather3<F>(rows.dax, rows.day, rows.daz, pair.readA);
-        dpB = gather3<F>(rows.dpx, rows.dpy, rows.dpz, pair.readB);
-        daB = gather3<F>(rows.dax, rows.day, rows.daz, pair.readB);
+        const RowW<F> a = loadRows<F>(rows.motion, b.bodyA + lane), c = loadRows<F>(rows.motion, b.bodyB + lane);
+        dpA = a.linear, daA = a.angular;
+        dpB = c.linear, daB = c.angular;
     }
     const F invH(params.invH);
     const F biasRate = at<F>(b.biasRate, lane), slop = at<F>(b.slop, lane);
@@ -242,19 +262,18 @@ void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveP
         put(p.maxNormalImpulse, lane, simd::max(at<F>(p.maxNormalImpulse, lane), updated - old));
         pair.apply(rA, rB, n * (updated - old));
     }
-    pair.store(rows.vx, rows.vy, rows.vz, rows.wx, rows.wy, rows.wz);
+    pair.store(rows.velocity);
 }
 
 /// Split impulses: the overlap beyond the slop is removed through pseudo-velocities, which move the bodies this
 /// substep and are then forgotten, so that push-out never becomes kinetic energy.
 template <class F>
 void solvePositions(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveParams& params) {
-    Pair<F> pair(b, lane, rows.pvx, rows.pvy, rows.pvz, rows.pwx, rows.pwy, rows.pwz, rows.scratchRow);
+    Pair<F> pair(b, lane, rows.pseudo, rows.scratchRow);
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
-    const Vec3W<F> dpA = gather3<F>(rows.dpx, rows.dpy, rows.dpz, pair.readA);
-    const Vec3W<F> daA = gather3<F>(rows.dax, rows.day, rows.daz, pair.readA);
-    const Vec3W<F> dpB = gather3<F>(rows.dpx, rows.dpy, rows.dpz, pair.readB);
-    const Vec3W<F> daB = gather3<F>(rows.dax, rows.day, rows.daz, pair.readB);
+    const RowW<F> motionA = loadRows<F>(rows.motion, b.bodyA + lane);
+    const RowW<F> motionB = loadRows<F>(rows.motion, b.bodyB + lane);
+    const Vec3W<F>&dpA = motionA.linear, &daA = motionA.angular, &dpB = motionB.linear, &daB = motionB.angular;
     const F biasRate = at<F>(b.biasRate, lane), slop = at<F>(b.slop, lane);
     const F maxPush(params.maxPushOutVelocity);
     for (ContactBatch::Point& p : b.points) {
@@ -267,13 +286,13 @@ void solvePositions(ContactBatch& b, std::size_t lane, const BodyRows& rows, con
         put(p.pseudoImpulse, lane, updated);
         pair.apply(rA, rB, n * (updated - old));
     }
-    pair.store(rows.pvx, rows.pvy, rows.pvz, rows.pwx, rows.pwy, rows.pwz);
+    pair.store(rows.pseudo);
 }
 
 /// Reverses approach speeds above the threshold by the restitution coefficient, at points that pushed this step.
 template <class F>
 void restitution(ContactBatch& b, std::size_t lane, const BodyRows& rows, float threshold) {
-    Pair<F> pair(b, lane, rows.vx, rows.vy, rows.vz, rows.wx, rows.wy, rows.wz, rows.scratchRow);
+    Pair<F> pair(b, lane, rows.velocity, rows.scratchRow);
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
     const F e = at<F>(b.restitution, lane);
     for (ContactBatch::Point& p : b.points) {
@@ -288,7 +307,7 @@ void restitution(ContactBatch& b, std::size_t lane, const BodyRows& rows, float 
         put(p.normalImpulse, lane, updated);
         pair.apply(rA, rB, n * (updated - old));
     }
-    pair.store(rows.vx, rows.vy, rows.vz, rows.wx, rows.wy, rows.wz);
+    pair.store(rows.velocity);
 }
 
 }  // namespace contact_kernels

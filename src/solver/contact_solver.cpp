@@ -235,10 +235,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         batchCount ? static_cast<float>(stats_.constraints) / static_cast<float>(batchCount * kBatchLanes) : 0;
     // Body rows: the touched bodies, the still row, one scratch row per worker.
     const std::size_t rows = bodyCount + 1 + static_cast<std::size_t>(scratchRows_);
-    for (auto* a : {&bodies_.vx, &bodies_.vy, &bodies_.vz, &bodies_.wx, &bodies_.wy, &bodies_.wz, &bodies_.dpx,
-                    &bodies_.dpy, &bodies_.dpz, &bodies_.dax, &bodies_.day, &bodies_.daz, &bodies_.pvx, &bodies_.pvy,
-                    &bodies_.pvz, &bodies_.pwx, &bodies_.pwy, &bodies_.pwz})
-        a->assign(rows, 0.0f);
+    for (auto* a : {&bodies_.velocity, &bodies_.motion, &bodies_.pseudo}) a->assign(rows, BodyRow{});
     for (auto* a : {&p0x_, &p0y_, &p0z_, &q0x_, &q0y_, &q0z_, &q0w_}) a->resize(bodyCount);
     pool.forChunks(bodyCount, kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t i = begin; i < end; ++i) {
@@ -377,15 +374,15 @@ void ContactSolver::loadBodies(const MovingBodies& m, TaskPool& pool) {
         bool moved = false;
         for (std::size_t i = begin; i < end; ++i) {
             const std::uint32_t d = b.moving[i];
-            b.vx[i] = m.vx[d], b.vy[i] = m.vy[d], b.vz[i] = m.vz[d];
-            b.wx[i] = m.wx[d], b.wy[i] = m.wy[d], b.wz[i] = m.wz[d];
-            b.dpx[i] = m.px[d] - p0x_[i], b.dpy[i] = m.py[d] - p0y_[i], b.dpz[i] = m.pz[d] - p0z_[i];
+            b.velocity[i] = {{m.vx[d], m.vy[d], m.vz[d]}, {m.wx[d], m.wy[d], m.wz[d]}};
+            const Vec3 dp{m.px[d] - p0x_[i], m.py[d] - p0y_[i], m.pz[d] - p0z_[i]};
             // q q0^-1 = (vector u, scalar c); the small rotation is 2u, on the short side of the double cover.
             const Quat q{m.qx[d], m.qy[d], m.qz[d], m.qw[d]};
             const Quat delta = q * conjugate(Quat{q0x_[i], q0y_[i], q0z_[i], q0w_[i]});
             const float sign = delta.w < 0 ? -2.0f : 2.0f;
-            b.dax[i] = sign * delta.x, b.day[i] = sign * delta.y, b.daz[i] = sign * delta.z;
-            moved |= b.dpx[i] != 0 || b.dpy[i] != 0 || b.dpz[i] != 0 || b.dax[i] != 0 || b.day[i] != 0 || b.daz[i] != 0;
+            const Vec3 da{sign * delta.x, sign * delta.y, sign * delta.z};
+            b.motion[i] = {dp, da};
+            moved |= dp.x != 0 || dp.y != 0 || dp.z != 0 || da.x != 0 || da.y != 0 || da.z != 0;
         }
         movedInChunk[chunk] = moved;
     });
@@ -398,32 +395,16 @@ void ContactSolver::storeVelocities(MovingBodies& m, TaskPool& pool) const {
         for (std::size_t i = begin; i < end; ++i) {
             const std::uint32_t d = b.moving[i];
             if ((m.flags[d] & (kFlagKinematic | kFlagFrozen | kFlagAsleep)) != 0) continue;
-            m.vx[d] = b.vx[i], m.vy[d] = b.vy[i], m.vz[d] = b.vz[i];
-            m.wx[d] = b.wx[i], m.wy[d] = b.wy[i], m.wz[d] = b.wz[i];
+            const BodyRow& r = b.velocity[i];
+            m.vx[d] = r.linear.x, m.vy[d] = r.linear.y, m.vz[d] = r.linear.z;
+            m.wx[d] = r.angular.x, m.wy[d] = r.angular.y, m.wz[d] = r.angular.z;
         }
     });
 }
 
 BodyRows ContactSolver::rowsFor(int worker) {
     SolverBodies& b = bodies_;
-    return BodyRows{b.vx.data(),
-                    b.vy.data(),
-                    b.vz.data(),
-                    b.wx.data(),
-                    b.wy.data(),
-                    b.wz.data(),
-                    b.dpx.data(),
-                    b.dpy.data(),
-                    b.dpz.data(),
-                    b.dax.data(),
-                    b.day.data(),
-                    b.daz.data(),
-                    b.pvx.data(),
-                    b.pvy.data(),
-                    b.pvz.data(),
-                    b.pwx.data(),
-                    b.pwy.data(),
-                    b.pwz.data(),
+    return BodyRows{b.velocity.data(), b.motion.data(), b.pseudo.data(),
                     static_cast<std::int32_t>(b.count + 1 + static_cast<std::uint32_t>(worker))};
 }
 
@@ -698,8 +679,9 @@ void ContactSolver::applyPseudoVelocities(MovingBodies& m, TaskPool& pool) {
         for (std::size_t i = begin; i < end; ++i) {
             const std::uint32_t d = b.moving[i];
             if ((m.flags[d] & (kFlagKinematic | kFlagFrozen | kFlagAsleep)) == 0) {
-                m.px[d] += b.pvx[i] * h, m.py[d] += b.pvy[i] * h, m.pz[d] += b.pvz[i] * h;
-                const Vec3 w{b.pwx[i] * h, b.pwy[i] * h, b.pwz[i] * h};
+                const BodyRow& pseudo = b.pseudo[i];
+                m.px[d] += pseudo.linear.x * h, m.py[d] += pseudo.linear.y * h, m.pz[d] += pseudo.linear.z * h;
+                const Vec3 w{pseudo.angular.x * h, pseudo.angular.y * h, pseudo.angular.z * h};
                 if (w != Vec3{}) {
                     const Quat q{m.qx[d], m.qy[d], m.qz[d], m.qw[d]};
                     const Quat dq = Quat{w.x * 0.5f, w.y * 0.5f, w.z * 0.5f, 0.0f} * q;
@@ -708,11 +690,10 @@ void ContactSolver::applyPseudoVelocities(MovingBodies& m, TaskPool& pool) {
                     m.qx[d] = r.x / len, m.qy[d] = r.y / len, m.qz[d] = r.z / len, m.qw[d] = r.w / len;
                 }
             }
-            b.pvx[i] = b.pvy[i] = b.pvz[i] = b.pwx[i] = b.pwy[i] = b.pwz[i] = 0.0f;
+            b.pseudo[i] = BodyRow{};
         }
     });
-    for (std::size_t i = b.count; i < b.pvx.size(); ++i)
-        b.pvx[i] = b.pvy[i] = b.pvz[i] = b.pwx[i] = b.pwy[i] = b.pwz[i] = 0.0f;
+    std::fill(b.pseudo.begin() + b.count, b.pseudo.end(), BodyRow{});
     // The pseudo impulses start again from zero in the next substep.
     for (ContactBatch& batch : batches_)
         for (ContactBatch::Point& p : batch.points)

@@ -37,12 +37,13 @@ using JointPass = FunctionRef<void(std::uint32_t segment, int pass)>;
 /// Rows [0, count) are the moving bodies the constraints touch, row `count` is the still body that stands for
 /// every static body (always zero), and the rows after it are per-worker scratch rows that absorb the writes aimed
 /// at bodies that cannot move (static and kinematic), so that no two threads ever write the same row.
+/// Each kind of row is one array of 32-byte BodyRows (AoS), so that a SIMD lane's body is one load, not six.
 struct SolverBodies {
-    AlignedVector<float> vx, vy, vz, wx, wy, wz;
-    AlignedVector<float> dpx, dpy, dpz;                 ///< displacement of the centre of mass since prepare()
-    AlignedVector<float> dax, day, daz;                 ///< rotation since prepare() as a small-angle vector
-    AlignedVector<float> pvx, pvy, pvz, pwx, pwy, pwz;  ///< split impulses' pseudo-velocities
-    std::vector<std::uint32_t> moving;                  ///< solver index -> dense index of the moving body
+    AlignedVector<BodyRow> velocity;  ///< linear and angular velocity
+    /// Displacement of the centre of mass since prepare() (linear), and the rotation since as a small-angle vector.
+    AlignedVector<BodyRow> motion;
+    AlignedVector<BodyRow> pseudo;      ///< split impulses' pseudo-velocities
+    std::vector<std::uint32_t> moving;  ///< solver index -> dense index of the moving body
     std::uint32_t count = 0;
 };
 

@@ -18,12 +18,12 @@ struct Velocity {
 
 Velocity loadRow(const SolverBodies& b, std::int32_t row) {
     if (row < 0) return {};
-    return {{b.vx[row], b.vy[row], b.vz[row]}, {b.wx[row], b.wy[row], b.wz[row]}};
+    const BodyRow& r = b.velocity[static_cast<std::size_t>(row)];
+    return {r.linear, r.angular};
 }
 
 void storeRow(SolverBodies& b, std::int32_t row, const Velocity& s) {
-    b.vx[row] = s.v.x, b.vy[row] = s.v.y, b.vz[row] = s.v.z;
-    b.wx[row] = s.w.x, b.wy[row] = s.w.y, b.wz[row] = s.w.z;
+    b.velocity[static_cast<std::size_t>(row)] = {s.v, s.w};
 }
 
 /// The two bodies of a joint during one solve: velocities in, impulses applied, velocities out (dynamic sides only).
