@@ -27,9 +27,11 @@ struct Image {
 
 /// Runs the viewer headless with `arguments`; returns false (with a reason) when it cannot run here.
 bool renderHeadless(const std::string& arguments, const std::string& png, std::string& skipReason) {
-    std::string prefix;
+    // Mesa's software rasteriser renders on the calling thread: its own worker threads are not instrumented, and
+    // under ThreadSanitizer their teardown reads as races in swrast_dri.so that are not Rubble's.
+    std::string prefix = "LP_NUM_THREADS=0 ";
     if (haveProgram("xvfb-run"))
-        prefix = "xvfb-run -a -s '-screen 0 1280x720x24' ";
+        prefix += "xvfb-run -a -s '-screen 0 1280x720x24' ";
     else if (!std::getenv("DISPLAY")) {
         skipReason = "xvfb-run is not installed and there is no DISPLAY (scripts/install-deps.sh installs xvfb)";
         return false;
