@@ -1,18 +1,16 @@
 // rubble: the command-line runner. Loads a scene, steps it and prints what each stage cost.
-#include <unistd.h>
 
 #include <algorithm>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <thread>
 #include <vector>
 
+#include "command_line.h"
 #include "rubble/build_info.h"
 #include "rubble/error.h"
 #include "rubble/runtime.h"
@@ -56,21 +54,12 @@ struct Options {
 }
 
 long parseCount(std::string_view flag, const char* text, long min, long max) {
-    long value = 0;
-    const char* end = text + std::strlen(text);
-    const auto [ptr, ec] = std::from_chars(text, end, value);
-    if (ec != std::errc{} || ptr != end || value < min || value > max)
-        usageError(std::string(flag) + " takes a whole number in [" + std::to_string(min) + ", " + std::to_string(max) +
-                   "], not '" + text + "'");
-    return value;
+    const std::optional<long> value = rubble::apps::parseWhole(text, min, max);
+    if (!value) usageError(rubble::apps::wholeNumberError(flag, text, min, max));
+    return *value;
 }
 
-std::string defaultScene() {
-    const char* candidates[] = {"scenes/s1_pyramid.json", RUBBLE_SCENES_DIR "/s1_pyramid.json"};
-    for (const char* path : candidates)
-        if (access(path, R_OK) == 0) return path;
-    return candidates[0];
-}
+std::string defaultScene() { return rubble::apps::defaultScene(RUBBLE_SCENES_DIR); }
 
 Options parseOptions(int argc, char** argv) {
     if (argc < 2) usageError("missing command");

@@ -1,13 +1,12 @@
 // rubble-viewer: opens a scene (or the marble demo) in a window, or renders it headless into a PNG.
-#include <unistd.h>
 
-#include <charconv>
 #include <cstdio>
-#include <cstring>
 #include <exception>
+#include <optional>
 #include <string>
 #include <string_view>
 
+#include "command_line.h"
 #include "rubble/error.h"
 #include "viewer_app.h"
 
@@ -35,20 +34,12 @@ constexpr const char* kUsage =
 }
 
 long parseNumber(std::string_view flag, std::string_view text, long min, long max) {
-    long value = 0;
-    const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-    if (ec != std::errc{} || ptr != text.data() + text.size() || value < min || value > max)
-        usageError(std::string(flag) + " takes a whole number in [" + std::to_string(min) + ", " + std::to_string(max) +
-                   "], not '" + std::string(text) + "'");
-    return value;
+    const std::optional<long> value = rubble::apps::parseWhole(text, min, max);
+    if (!value) usageError(rubble::apps::wholeNumberError(flag, text, min, max));
+    return *value;
 }
 
-std::string defaultScene() {
-    const char* candidates[] = {"scenes/s1_pyramid.json", RUBBLE_SCENES_DIR "/s1_pyramid.json"};
-    for (const char* path : candidates)
-        if (access(path, R_OK) == 0) return path;
-    return candidates[0];
-}
+std::string defaultScene() { return rubble::apps::defaultScene(RUBBLE_SCENES_DIR); }
 
 rubble::viewer::ViewerOptions parseOptions(int argc, char** argv) {
     rubble::viewer::ViewerOptions o;
