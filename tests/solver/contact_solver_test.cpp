@@ -184,10 +184,10 @@ TEST(ContactSolver, IslandBlocksEndWhereOneColouringEnds) {
     buildPyramid(world, 12);  // one island too large for a block (over a thousand manifolds)
     BodyDef box;
     box.shape = world.createShape(BoxDef{{0.4f, 0.4f, 0.4f}});
-    for (int stack = 0; stack < 120; ++stack)  // small islands: stacks of three boxes beside the pyramid
+    for (int stack = 0; stack < 300; ++stack)  // small islands: stacks of three boxes beside the pyramid
         for (int level = 0; level < 3; ++level) {
-            box.position = {20.0f + 2.0f * static_cast<float>(stack % 12), 0.4f + 0.8f * static_cast<float>(level),
-                            -10.0f + 2.0f * static_cast<float>(stack / 12)};
+            box.position = {20.0f + 2.0f * static_cast<float>(stack % 15), 0.4f + 0.8f * static_cast<float>(level),
+                            -10.0f + 2.0f * static_cast<float>(stack / 15)};
             world.createBody(box);
         }
     // A small island whose plate touches more boxes than there are colours: its block ends in an overflow range.
