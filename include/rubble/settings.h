@@ -47,7 +47,7 @@ std::optional<Integrator> integratorFromName(std::string_view name);
 
 /// How the contact solver removes overlap. Baumgarte (a fraction of the overlap beyond a slop fed back as approach
 /// speed inside the velocity iterations) is the default: measured on S1 with the scenes' 8 + 2 iterations and one
-/// substep it moves no cube more than 4.6 cm in 600 steps, where the soft step's contacts, as soft as one 60 Hz
+/// substep it moves no cube more than 4.4 cm in 600 steps, where the soft step's contacts, as soft as one 60 Hz
 /// substep allows, let the pyramid sag 16 cm. The soft step (soft contact constraints whose stiffness follows the
 /// substep rate, then relax iterations that take the push-out velocity away again) wins with substeps and holds tall
 /// towers better; split impulses correct positions with pseudo-velocities that never reach the real ones, so that
