@@ -588,6 +588,11 @@ void World::step(float dt) {
     bool collided = false;
     // Time in the joints' passes, summed over the threads that ran them (blocks run their joints in their tasks).
     std::atomic<detail::Clock::rep> jointNs{0};
+    const auto timeJoints = [&](auto&& work) {
+        const auto jointBegin = detail::Clock::now();
+        work();
+        jointNs.fetch_add((detail::Clock::now() - jointBegin).count(), std::memory_order_relaxed);
+    };
     for (int sub = 0; sub < substeps; ++sub) {
         const bool lastSub = sub == substeps - 1;
         params.forces = w.forcesPending;
@@ -666,12 +671,12 @@ void World::step(float dt) {
             // joints, then its contact colours, in every pass; with warm starting, pass 0 is the warm start.
             const bool warm = solver.warmStarting;
             auto velocityJoints = [&](std::uint32_t segment, int pass) {
-                const auto jointBegin = detail::Clock::now();
-                if (warm && pass == 0)
-                    js.warmStart(cs.bodies(), segment);
-                else
-                    js.solve(cs.bodies(), true, segment);
-                jointNs.fetch_add((detail::Clock::now() - jointBegin).count(), std::memory_order_relaxed);
+                timeJoints([&] {
+                    if (warm && pass == 0)
+                        js.warmStart(cs.bodies(), segment);
+                    else
+                        js.solve(cs.bodies(), true, segment);
+                });
             };
             const detail::JointPass velocityPass = velocityJoints;
             cs.solveVelocities(true, *w.pool, w.settings.velocityIterations, warm, joints ? &velocityPass : nullptr);
@@ -694,9 +699,7 @@ void World::step(float dt) {
             if (relax || bounce) {
                 cs.loadBodies(w.bodies.moving, *w.pool);
                 auto relaxJoints = [&](std::uint32_t segment, int) {
-                    const auto jointBegin = detail::Clock::now();
-                    w.jointSolver.solve(cs.bodies(), false, segment);
-                    jointNs.fetch_add((detail::Clock::now() - jointBegin).count(), std::memory_order_relaxed);
+                    timeJoints([&] { w.jointSolver.solve(cs.bodies(), false, segment); });
                 };
                 const detail::JointPass relaxPass = relaxJoints;
                 if (relax)

@@ -332,12 +332,17 @@ template <class F>
             simd::andMask(simd::andMask(out.valid[k], out.depth[k] >= deepest - F(kReductionDepthTie)), d2 > best);
         best = select(take, d2, best), i0 = select(take, F(float(k)), i0);
     }
-    F u0 = zero, v0 = zero;
-    for (int x = 0; x < usedCount; ++x) {
-        const int k = used[x];
-        const auto at = i0 == F(float(k));
-        u0 = select(at, out.u[k], u0), v0 = select(at, out.v[k], v0);
-    }
+    // The plane coordinates of the slot chosen in each lane.
+    const auto coordinatesOf = [&](const F& chosen, F& u, F& v) {
+        u = zero, v = zero;
+        for (int x = 0; x < usedCount; ++x) {
+            const int k = used[x];
+            const auto at = chosen == F(float(k));
+            u = select(at, out.u[k], u), v = select(at, out.v[k], v);
+        }
+    };
+    F u0, v0;
+    coordinatesOf(i0, u0, v0);
     F i1 = none;
     best = none;
     for (int x = 0; x < usedCount; ++x) {
@@ -346,12 +351,8 @@ template <class F>
         const auto take = simd::andMask(simd::andMask(out.valid[k], i0 != F(float(k))), d2 > best);
         best = select(take, d2, best), i1 = select(take, F(float(k)), i1);
     }
-    F u1 = zero, v1 = zero;
-    for (int x = 0; x < usedCount; ++x) {
-        const int k = used[x];
-        const auto at = i1 == F(float(k));
-        u1 = select(at, out.u[k], u1), v1 = select(at, out.v[k], v1);
-    }
+    F u1, v1;
+    coordinatesOf(i1, u1, v1);
     const F eu = u1 - u0, ev = v1 - v0;
     F i2 = none, orient = one;
     best = none;
@@ -363,12 +364,8 @@ template <class F>
         best = select(take, size, best), i2 = select(take, F(float(k)), i2);
         orient = select(take, select(area < zero, F(-1.0f), one), orient);
     }
-    F u2 = zero, v2 = zero;
-    for (int x = 0; x < usedCount; ++x) {
-        const int k = used[x];
-        const auto at = i2 == F(float(k));
-        u2 = select(at, out.u[k], u2), v2 = select(at, out.v[k], v2);
-    }
+    F u2, v2;
+    coordinatesOf(i2, u2, v2);
     const F tu[3] = {u0, u1, u2}, tv[3] = {v0, v1, v2};
     F i3 = none;
     best = F(-3.4e38f);

@@ -200,16 +200,19 @@ void mergeNearDuplicates(Candidates& c, float tol) {
     c.count = kept;
 }
 
-/// Writes at most 4 of the candidates (the shared reduction: deepest first, then the largest area in the plane
-/// across `n`) to `out`, moved from the kernel's frame to the world by `pose`.
+/// Which (at most 4) of the candidates to keep: the shared reduction, deepest first, then the largest area in the
+/// plane across `n`. Returns how many of `chosen` are set.
+int chooseReduced(const Candidates& c, Vec3 n, int (&chosen)[4]) {
+    if (c.count <= 4) return c.count;
+    Vec3 u, v;
+    planeBasis(n, u, v);
+    return reduceContactPoints(c.position, c.depth, c.count, u, v, chosen);
+}
+
+/// Writes the chosen candidates to `out`, moved from the kernel's frame to the world by `pose`.
 int emitReduced(const Candidates& c, Vec3 n, const Transform& pose, Manifold& out) {
     int chosen[4] = {0, 1, 2, 3};
-    int count = c.count;
-    if (count > 4) {
-        Vec3 u, v;
-        planeBasis(n, u, v);
-        count = reduceContactPoints(c.position, c.depth, c.count, u, v, chosen);
-    }
+    const int count = chooseReduced(c, n, chosen);
     out.normal = rotate(pose.rotation, n);
     for (int i = 0; i < count; ++i)
         addPoint(out, rotate(pose.rotation, c.position[chosen[i]]) + pose.position, c.depth[chosen[i]],
@@ -220,12 +223,7 @@ int emitReduced(const Candidates& c, Vec3 n, const Transform& pose, Manifold& ou
 /// The same for a kernel whose frame is a posed box (rotation as a matrix).
 int emitReduced(const Candidates& c, Vec3 n, const TriangleBox& box, Manifold& out) {
     int chosen[4] = {0, 1, 2, 3};
-    int count = c.count;
-    if (count > 4) {
-        Vec3 u, v;
-        planeBasis(n, u, v);
-        count = reduceContactPoints(c.position, c.depth, c.count, u, v, chosen);
-    }
+    const int count = chooseReduced(c, n, chosen);
     out.normal = box.toWorld * n;
     for (int i = 0; i < count; ++i)
         addPoint(out, box.toWorld * c.position[chosen[i]] + box.pose.position, c.depth[chosen[i]],

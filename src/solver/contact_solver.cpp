@@ -206,7 +206,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
             constraints += 1;
         }
         // Every colour starts a fresh batch; the overflow colour comes last.
-        const ColorSpan span{static_cast<std::uint32_t>(colors_.size()), 0};
+        const auto firstColor = static_cast<std::uint32_t>(colors_.size());
         std::uint32_t colorFirstBatch[kMaxColors + 1] = {};
         for (std::uint32_t c = 0; c <= kMaxColors; ++c) {
             if (colorCounts[c] == 0) continue;
@@ -215,16 +215,15 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
             colors_.push_back({batchCount, n, c == kOverflowColor});
             batchCount += n;
         }
-        const ColorSpan filledSpan{span.firstColor, static_cast<std::uint32_t>(colors_.size()) - span.firstColor};
+        const ColorSpan span{firstColor, static_cast<std::uint32_t>(colors_.size()) - firstColor};
         if (largePart) {
-            large_ = filledSpan;
-        } else {
-            blockOfSegment_[segment] =
-                filledSpan.colorCount > 0 ? static_cast<std::uint32_t>(blocks_.size()) : kLargeSegment;
-            if (filledSpan.colorCount > 0) blocks_.push_back(filledSpan);
+            large_ = span;
+        } else if (span.colorCount > 0) {
+            blockOfSegment_[segment] = static_cast<std::uint32_t>(blocks_.size());
+            blocks_.push_back(span);
         }
         stats_.constraints += constraints;
-        stats_.colors = std::max(stats_.colors, filledSpan.colorCount);
+        stats_.colors = std::max(stats_.colors, span.colorCount);
         if (largePart) stats_.largeIslandConstraints = constraints;
         manifoldOfLane_.resize(std::size_t{batchCount} * kBatchLanes, ~0u);
         std::uint32_t filled[kMaxColors + 1] = {};

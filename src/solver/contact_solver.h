@@ -141,8 +141,6 @@ public:
     bool hasOverflow() const {
         return std::any_of(colors_.begin(), colors_.end(), [](const ColorRange& r) { return r.overflow; });
     }
-    /// Manifold in a batch lane (batch * kBatchLanes + lane), or ~0u for an empty lane.
-    std::uint32_t manifoldOfLane(std::size_t lane) const { return manifoldOfLane_[lane]; }
 
 private:
     /// Runs kernel(batch, lane, rows, pass) over every colour `passes` times (pass 0, 1, ...): a block runs all its
