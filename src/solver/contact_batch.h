@@ -4,6 +4,7 @@
 // the tests compare the wide kernels with, and that perf/ measures them against).
 #include <cstddef>
 #include <cstdint>
+#include <span>
 
 #include "narrowphase/manifold.h"
 #include "simd/transpose.h"
@@ -14,14 +15,17 @@ namespace rubble::detail {
 inline constexpr std::size_t kBatchLanes = simd::kLanes;
 
 /// Up to kBatchLanes manifolds in SoA form. A lane with no manifold, and a point beyond a manifold's count, has
-/// zero masses, so every impulse it computes is zero. Static bodies read the still row; only dynamic bodies are
+/// zero masses, so every impulse it computes is zero. Points at pointCount and beyond are in no lane and are never
+/// read: the kernels stop there, so that a batch of one-point contacts (spheres, capsules on a mesh) costs a quarter
+/// of a batch of boxes. Static bodies read the still row; only dynamic bodies are
 /// written back (the kernels redirect other writes to a scratch row).
 struct alignas(64) ContactBatch {
     using Lanes = float[kBatchLanes];
     std::int32_t bodyA[kBatchLanes];
     std::int32_t bodyB[kBatchLanes];
-    Lanes nx, ny, nz;     ///< normal, from A to B
-    Lanes t1x, t1y, t1z;  ///< friction directions: t1, t2, n right-handed
+    std::int32_t pointCount;  ///< the most points of any lane's manifold
+    Lanes nx, ny, nz;         ///< normal, from A to B
+    Lanes t1x, t1y, t1z;      ///< friction directions: t1, t2, n right-handed
     Lanes t2x, t2y, t2z;
     Lanes invMassA, invMassB;
     Lanes iaXX, iaYY, iaZZ, iaXY, iaXZ, iaYZ;  ///< world inverse inertia of A
@@ -171,6 +175,14 @@ struct Pair {
     }
 };
 
+/// The points some lane uses.
+inline std::span<ContactBatch::Point> pointsOf(ContactBatch& b) {
+    return {b.points, static_cast<std::size_t>(b.pointCount)};
+}
+inline std::span<const ContactBatch::Point> pointsOf(const ContactBatch& b) {
+    return {b.points, static_cast<std::size_t>(b.pointCount)};
+}
+
 template <class F>
 Vec3W<F> anchorA(const ContactBatch::Point& p, std::size_t lane) {
     return at3<F>(p.rAx, p.rAy, p.rAz, lane);
@@ -187,7 +199,7 @@ void warmStart(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
     const Vec3W<F> t1 = at3<F>(b.t1x, b.t1y, b.t1z, lane);
     const Vec3W<F> t2 = at3<F>(b.t2x, b.t2y, b.t2z, lane);
-    for (const ContactBatch::Point& p : b.points) {
+    for (const ContactBatch::Point& p : pointsOf(b)) {
         const Vec3W<F> impulse = n * at<F>(p.normalImpulse, lane) + t1 * at<F>(p.tangentImpulse1, lane) +
                                  t2 * at<F>(p.tangentImpulse2, lane);
         pair.apply(anchorA<F>(p, lane), anchorB<F>(p, lane), impulse);
@@ -214,7 +226,7 @@ void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveP
         const Vec3W<F> t1 = at3<F>(b.t1x, b.t1y, b.t1z, lane);
         const Vec3W<F> t2 = at3<F>(b.t2x, b.t2y, b.t2z, lane);
         const F mu = at<F>(b.friction, lane);
-        for (ContactBatch::Point& p : b.points) {
+        for (ContactBatch::Point& p : pointsOf(b)) {
             const Vec3W<F> rA = anchorA<F>(p, lane), rB = anchorB<F>(p, lane);
             const Vec3W<F> dv = pair.relativeVelocity(rA, rB);
             const F old1 = at<F>(p.tangentImpulse1, lane), old2 = at<F>(p.tangentImpulse2, lane);
@@ -243,7 +255,7 @@ void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveP
     const F massScale = params.useBias ? at<F>(b.massScale, lane) : F(1.0f);
     const F impulseScale = params.useBias ? at<F>(b.impulseScale, lane) : F(0.0f);
     const F maxPush(-params.maxPushOutVelocity);
-    for (ContactBatch::Point& p : b.points) {
+    for (ContactBatch::Point& p : pointsOf(b)) {
         const Vec3W<F> rA = anchorA<F>(p, lane), rB = anchorB<F>(p, lane);
         const F s = separation(p, lane, n, rA, rB, dpA, daA, dpB, daB);
         const auto apart = s > F(0.0f);
@@ -276,7 +288,7 @@ void solvePositions(ContactBatch& b, std::size_t lane, const BodyRows& rows, con
     const Vec3W<F>&dpA = motionA.linear, &daA = motionA.angular, &dpB = motionB.linear, &daB = motionB.angular;
     const F biasRate = at<F>(b.biasRate, lane), slop = at<F>(b.slop, lane);
     const F maxPush(params.maxPushOutVelocity);
-    for (ContactBatch::Point& p : b.points) {
+    for (ContactBatch::Point& p : pointsOf(b)) {
         const Vec3W<F> rA = anchorA<F>(p, lane), rB = anchorB<F>(p, lane);
         const F s = separation(p, lane, n, rA, rB, dpA, daA, dpB, daB);
         const F target = simd::min(F(0.0f) - biasRate * simd::min(s + slop, F(0.0f)), maxPush);
@@ -295,7 +307,7 @@ void restitution(ContactBatch& b, std::size_t lane, const BodyRows& rows, float 
     Pair<F> pair(b, lane, rows.velocity, rows.scratchRow);
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
     const F e = at<F>(b.restitution, lane);
-    for (ContactBatch::Point& p : b.points) {
+    for (ContactBatch::Point& p : pointsOf(b)) {
         const F approach = at<F>(p.relativeVelocity, lane);
         const auto bounces = simd::andMask(approach<F(-threshold), at<F>(p.maxNormalImpulse, lane)> F(0.0f));
         if (simd::none(bounces)) continue;

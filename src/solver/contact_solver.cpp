@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 
 #include "islands.h"
@@ -105,7 +106,7 @@ void finishBatch(ContactBatch& b, const BatchInputs& in, bool friction) {
     const simd::SymMat3W<F> iA = contact_kernels::inertiaA<F>(b, 0), iB = contact_kernels::inertiaB<F>(b, 0);
     const simd::Vec3W<F> vA = at3<F>(in.vAx, in.vAy, in.vAz, 0), wA = at3<F>(in.wAx, in.wAy, in.wAz, 0);
     const simd::Vec3W<F> vB = at3<F>(in.vBx, in.vBy, in.vBz, 0), wB = at3<F>(in.wBx, in.wBy, in.wBz, 0);
-    for (int i = 0; i < kMaxManifoldPoints; ++i) {
+    for (int i = 0; i < b.pointCount; ++i) {
         const auto present = at<F>(in.point[i], 0) > zero;
         if (!simd::any(present)) continue;
         ContactBatch::Point& pt = b.points[i];
@@ -170,6 +171,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     colors_.clear();
     blocks_.clear();
     manifoldOfLane_.clear();
+    batchPoints_.clear();
     stats_ = {};
     std::uint32_t batchCount = 0;
     const std::size_t segmentCount = segmentStart_.size() - 1;
@@ -179,6 +181,10 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         const std::uint32_t* first = segmentManifolds_.data() + segmentStart_[segment];
         const std::uint32_t* last = segmentManifolds_.data() + segmentStart_[segment + 1];
         std::uint32_t colorCounts[kMaxColors + 1] = {};
+        // Per colour, manifolds by point count: a colour's lanes are filled with the manifolds of most points first,
+        // so that batches of few-point manifolds stop early. Lanes of one colour share no dynamic body, so their
+        // order within the colour does not change the result.
+        std::uint32_t pointCounts[kMaxColors + 1][kMaxManifoldPoints + 1] = {};
         std::uint32_t constraints = 0;
         for (const std::uint32_t* it = first; it != last; ++it) {
             const std::uint32_t k = *it;
@@ -203,6 +209,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
             }
             colorOf_[k] = color;
             colorCounts[color] += 1;
+            pointCounts[color][contacts.manifolds[k].pointCount] += 1;
             constraints += 1;
         }
         // Every colour starts a fresh batch; the overflow colour comes last.
@@ -226,10 +233,26 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         stats_.colors = std::max(stats_.colors, span.colorCount);
         if (largePart) stats_.largeIslandConstraints = constraints;
         manifoldOfLane_.resize(std::size_t{batchCount} * kBatchLanes, ~0u);
-        std::uint32_t filled[kMaxColors + 1] = {};
+        batchPoints_.resize(batchCount, 0);
+        // Next free lane per colour and point count, counted from the colour's first lane. The overflow colour is
+        // solved lane by lane over shared bodies, so it keeps manifold order.
+        std::uint32_t filled[kMaxColors + 1][kMaxManifoldPoints + 1];
+        for (std::uint32_t c = 0; c <= kMaxColors; ++c) {
+            std::uint32_t at = 0;
+            for (int points = kMaxManifoldPoints; points >= 0; --points) {
+                filled[c][points] = at;
+                if (c != kOverflowColor) at += pointCounts[c][points];
+            }
+        }
         for (const std::uint32_t* it = first; it != last; ++it) {
             const std::uint32_t c = colorOf_[*it];
-            if (c != kNoColor) manifoldOfLane_[std::size_t{colorFirstBatch[c]} * kBatchLanes + filled[c]++] = *it;
+            if (c == kNoColor) continue;
+            const int points = contacts.manifolds[*it].pointCount;
+            const std::size_t slot =
+                std::size_t{colorFirstBatch[c]} * kBatchLanes + filled[c][c == kOverflowColor ? 0 : points]++;
+            manifoldOfLane_[slot] = *it;
+            std::uint8_t& most = batchPoints_[slot / kBatchLanes];
+            most = std::max(most, static_cast<std::uint8_t>(points));
         }
     }
     // Islands in a block that kept no constraint are solved with the large islands (their joints, say).
@@ -283,7 +306,11 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         for (std::size_t lane = 0; lane < kPrefetchLanes; ++lane) prefetchLane(begin * kBatchLanes + lane);
         for (std::size_t bi = begin; bi < end; ++bi) {
             ContactBatch& b = batches_[bi];
-            std::memset(static_cast<void*>(&b), 0, sizeof b);
+            b.pointCount = batchPoints_[bi];
+            std::memset(static_cast<void*>(&b), 0, offsetof(ContactBatch, pointCount));
+            std::memset(static_cast<void*>(&b.nx), 0,
+                        offsetof(ContactBatch, points) - offsetof(ContactBatch, nx) +
+                            sizeof(ContactBatch::Point) * static_cast<std::size_t>(b.pointCount));
             BatchInputs lanes;
             for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
                 b.bodyA[lane] = b.bodyB[lane] = stillRow;
@@ -570,7 +597,7 @@ void ContactSolver::computeHeldMasses(ShockContact& s) const {
         holdA ? contact_kernels::inertiaB<float>(b, lane) : contact_kernels::inertiaA<float>(b, lane);
     const Vec3 n{b.nx[lane], b.ny[lane], b.nz[lane]}, t1{b.t1x[lane], b.t1y[lane], b.t1z[lane]},
         t2{b.t2x[lane], b.t2y[lane], b.t2z[lane]};
-    for (int i = 0; i < kMaxManifoldPoints; ++i) {
+    for (int i = 0; i < b.pointCount; ++i) {
         const ContactBatch::Point& p = b.points[i];
         if (p.normalMass[lane] == 0) continue;  // no point here: its masses stay zero
         const Vec3 r =
@@ -614,7 +641,7 @@ void ContactSolver::solveHeld(const ShockContact& s, const BodyRows& rows, const
     float heldValues[7];
     for (int i = 0; i < 7; ++i) heldValues[i] = held[i][lane], held[i][lane] = 0;
     float pointMasses[kMaxManifoldPoints][3];
-    for (int i = 0; i < kMaxManifoldPoints; ++i) {
+    for (int i = 0; i < b.pointCount; ++i) {
         ContactBatch::Point& p = b.points[i];
         pointMasses[i][0] = p.normalMass[lane], pointMasses[i][1] = p.tangentMass1[lane];
         pointMasses[i][2] = p.tangentMass2[lane];
@@ -626,7 +653,7 @@ void ContactSolver::solveHeld(const ShockContact& s, const BodyRows& rows, const
     else
         contact_kernels::solve<float, false>(b, lane, rows, params);
     for (int i = 0; i < 7; ++i) held[i][lane] = heldValues[i];
-    for (int i = 0; i < kMaxManifoldPoints; ++i) {
+    for (int i = 0; i < b.pointCount; ++i) {
         ContactBatch::Point& p = b.points[i];
         p.normalMass[lane] = pointMasses[i][0], p.tangentMass1[lane] = pointMasses[i][1];
         p.tangentMass2[lane] = pointMasses[i][2];
@@ -702,7 +729,7 @@ void ContactSolver::applyPseudoVelocities(MovingBodies& m, TaskPool& pool) {
     std::fill(b.pseudo.begin() + b.count, b.pseudo.end(), BodyRow{});
     // The pseudo impulses start again from zero in the next substep.
     for (ContactBatch& batch : batches_)
-        for (ContactBatch::Point& p : batch.points)
+        for (ContactBatch::Point& p : contact_kernels::pointsOf(batch))
             std::fill(std::begin(p.pseudoImpulse), std::end(p.pseudoImpulse), 0.0f);
 }
 
@@ -728,7 +755,7 @@ void ContactSolver::storeImpulses(std::vector<PointImpulse>& impulses, TaskPool&
                            for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
                                const std::uint32_t k = manifoldOfLane_[bi * kBatchLanes + lane];
                                if (k == ~0u) continue;
-                               for (int i = 0; i < kMaxManifoldPoints; ++i) {
+                               for (int i = 0; i < b.pointCount; ++i) {
                                    const ContactBatch::Point& p = b.points[i];
                                    impulses[k * kMaxManifoldPoints + i] = {
                                        p.normalImpulse[lane], p.tangentImpulse1[lane], p.tangentImpulse2[lane]};

@@ -178,6 +178,7 @@ private:
     std::vector<ColorSpan> blocks_;
     ColorSpan large_;
     std::vector<std::uint32_t> manifoldOfLane_;  ///< batch * kLanes + lane -> manifold, ~0u for an empty lane
+    std::vector<std::uint8_t> batchPoints_;      ///< per batch: the most points of its lanes' manifolds
     std::vector<ShockContact> shockOrder_;       ///< by level, then by lane
     std::vector<std::uint32_t> levelOf_;         ///< shock pass: level per solver index
     std::vector<std::uint32_t> adjacencyStart_, adjacency_, adjacencyFill_;  ///< shock pass: contact graph (CSR)

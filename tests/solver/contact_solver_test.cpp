@@ -86,7 +86,8 @@ TEST(ContactSolver, PyramidColoursFillTheLanes) {
 }
 
 // Random contact graphs, dense enough to need the overflow set: within a colour no dynamic body appears twice
-// (checked by brute force over the prepared batches), and every manifold with a dynamic body is in exactly one lane.
+// (checked by brute force over the prepared batches), every manifold with a dynamic body is in exactly one lane, and
+// every one of its points (one to four) is within its batch's point count.
 TEST(ContactSolver, ColoursNeverHoldADynamicBodyTwice) {
     std::mt19937 rng(7);
     for (const int bodies : {40, 400}) {
@@ -116,8 +117,8 @@ TEST(ContactSolver, ColoursNeverHoldADynamicBodyTwice) {
             }
             detail::Manifold m;
             m.normal = {0, 1, 0};
-            m.pointCount = 1;
-            m.points[0].depth = 0.01f;
+            m.pointCount = 1 + k % detail::kMaxManifoldPoints;
+            for (int i = 0; i < m.pointCount; ++i) m.points[i].depth = 0.01f;
             contacts.pairs.push_back(pair);
             contacts.manifolds.push_back(m);
         }
@@ -126,7 +127,7 @@ TEST(ContactSolver, ColoursNeverHoldADynamicBodyTwice) {
         detail::ContactSolver solver;
         solver.prepare(contacts, warm, storage, WorldSettings{}, EffectSet::defaults(), 1.0f / 60.0f, pool);
         const auto& ranges = solver.colorRanges();
-        std::size_t lanes = 0;
+        std::size_t lanes = 0, points = 0;
         for (std::size_t c = 0; c < ranges.size(); ++c) {
             const bool overflow = solver.hasOverflow() && c + 1 == ranges.size();
             std::set<std::int32_t> seen;
@@ -135,6 +136,7 @@ TEST(ContactSolver, ColoursNeverHoldADynamicBodyTwice) {
                 for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
                     if (b.invMassA[lane] == 0 && b.invMassB[lane] == 0) continue;
                     ++lanes;
+                    for (int i = 0; i < b.pointCount; ++i) points += b.points[i].normalMass[lane] > 0 ? 1 : 0;
                     if (overflow) continue;  // solved one lane at a time, so sharing is allowed
                     if (b.invMassA[lane] > 0) {
                         EXPECT_TRUE(seen.insert(b.bodyA[lane]).second) << "colour " << c;
@@ -145,10 +147,14 @@ TEST(ContactSolver, ColoursNeverHoldADynamicBodyTwice) {
                 }
             }
         }
-        std::size_t expected = 0;
-        for (const detail::ContactPair& p : contacts.pairs)
-            expected += (storage.moving.invMass[p.a] > 0 || (!p.bStatic && storage.moving.invMass[p.b] > 0)) ? 1 : 0;
+        std::size_t expected = 0, expectedPoints = 0;
+        for (std::size_t k = 0; k < contacts.pairs.size(); ++k) {
+            const detail::ContactPair& p = contacts.pairs[k];
+            if (storage.moving.invMass[p.a] > 0 || (!p.bStatic && storage.moving.invMass[p.b] > 0))
+                ++expected, expectedPoints += static_cast<std::size_t>(contacts.manifolds[k].pointCount);
+        }
         EXPECT_EQ(lanes, expected);
+        EXPECT_EQ(points, expectedPoints);
         EXPECT_EQ(solver.stats().constraints, expected);
         if (bodies == 40) {
             EXPECT_TRUE(solver.hasOverflow()) << "40 bodies with ~70 neighbours each need > 63 colours";

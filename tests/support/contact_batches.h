@@ -17,6 +17,7 @@ inline void fillRandomBatch(detail::ContactBatch& b, std::mt19937& rng, std::int
                             std::int32_t firstBody = 0) {
     std::uniform_real_distribution<float> u(-1.0f, 1.0f), pos(0.1f, 1.0f);
     std::memset(static_cast<void*>(&b), 0, sizeof b);
+    b.pointCount = 3;
     for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
         // Distinct bodies per lane (as colouring guarantees); the last lane meets the still row.
         b.bodyA[lane] = firstBody + static_cast<std::int32_t>(2 * lane);
