@@ -236,6 +236,24 @@ inline MaskW orMask(const MaskW& a, const MaskW& b) { return a | b; }
 inline bool notMask(bool a) { return !a; }
 inline MaskW notMask(const MaskW& a) { return !a; }
 
+/// Bit k set where lane k of the mask is: one instruction (a mask-register move or a movemask) on x86.
+inline std::uint32_t laneBits(bool m) { return m ? 1u : 0u; }
+inline std::uint32_t laneBits(const MaskW& m) {
+#if defined(__AVX512F__)
+    return static_cast<std::uint32_t>(m.data);
+#elif defined(__AVX__)
+    return static_cast<std::uint32_t>(_mm256_movemask_ps(m.data));
+#elif defined(__SSE2__)
+    return static_cast<std::uint32_t>(_mm_movemask_ps(m.data));
+#else
+    bool bits[kLanes];
+    m.store_unaligned(bits);
+    std::uint32_t out = 0;
+    for (std::size_t k = 0; k < kLanes; ++k) out |= std::uint32_t{bits[k]} << k;
+    return out;
+#endif
+}
+
 /// Calls fn(k) for every lane k whose mask bit is set, in ascending order.
 template <class Fn>
 void forEachSetLane(bool m, Fn&& fn) {

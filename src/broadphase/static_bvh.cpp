@@ -295,47 +295,54 @@ struct QueryRows {
 /// compare pair with AVX-512, two with AVX, four with SSE; the fourth quarter (child indices) is ignored.
 inline unsigned overlapMask(const Node& n, const QueryRows& q) {
     using simd::FloatW;
-    alignas(16) bool bits[16];
+    std::uint32_t bits = 0;
     for (std::size_t part = 0; part < QueryRows::kParts; ++part) {
         const std::size_t off = part * simd::kLanes;
         const simd::MaskW m =
             (q.lo[part] <= simd::load<FloatW>(n.hi + off)) & (simd::load<FloatW>(n.lo + off) <= q.hi[part]);
-        simd::storeMask(bits + off, m);
+        bits |= simd::laneBits(m) << off;
     }
-    // bits holds one 0/1 byte per lane: and the x, y and z quarters as 32-bit words, then pack one bit per child.
-    std::uint32_t x, y, z;
-    std::memcpy(&x, bits, 4);
-    std::memcpy(&y, bits + 4, 4);
-    std::memcpy(&z, bits + 8, 4);
-    const std::uint32_t all = x & y & z;
-    return (all & 1u) | (all >> 7 & 2u) | (all >> 14 & 4u) | (all >> 21 & 8u);
+    // Bits 0-3 say x overlaps for children 0-3, bits 4-7 y, bits 8-11 z.
+    return bits & bits >> 4 & bits >> 8 & 0xFu;
 }
 
-/// Appends (body << 32) | triangle of every primitive of `tree` whose box overlaps `q`. `stack` holds at least
+/// Calls found(node, lane) for every primitive lane of `tree` whose box overlaps `q`. `stack` holds at least
 /// 3 * depth + 1 entries: each level pops one node and pushes at most four.
-void collect(const StaticBvh::Tree& tree, const QueryRows& q, std::uint32_t* stack, std::vector<std::uint64_t>& hits) {
+template <class Found>
+void walk(const StaticBvh::Tree& tree, const QueryRows& q, std::uint32_t* stack, Found&& found) {
     if (tree.nodes.empty()) return;
     const Node* nodes = tree.nodes.data();
-    const StaticBvh::PrimitiveRef* prims = tree.primitives.data();
     std::uint32_t top = 0;
     stack[top++] = 0;
     while (top > 0) {
         const Node& n = nodes[stack[--top]];
         for (unsigned mask = overlapMask(n, q); mask != 0; mask &= mask - 1) {
-            const std::uint32_t c = n.child(std::countr_zero(mask));
-            if ((c & kPrimitiveBit) == 0) {
+            const int k = std::countr_zero(mask);
+            const std::uint32_t c = n.child(k);
+            if ((c & kPrimitiveBit) == 0)
                 stack[top++] = c;
-            } else {
-                const StaticBvh::PrimitiveRef& p = prims[c & ~kPrimitiveBit];
-                hits.push_back(std::uint64_t(p.body) << 32 | p.triangle);
-            }
+            else
+                found(n, k, tree.primitives[c & ~kPrimitiveBit]);
         }
     }
+}
+
+/// How much a query box is grown on every side, as a share of its largest extent, for its hits to be kept: a
+/// body resting or sliding slowly stays inside for many steps, and the grown box holds few more primitives.
+constexpr float kQueryGrowth = 0.125f;
+
+/// Contains no box: a body without kept hits.
+constexpr Aabb kNoBox{{kInf, kInf, kInf}, {-kInf, -kInf, -kInf}};
+
+bool contains(const Aabb& outer, const Aabb& inner) {
+    return outer.min.x <= inner.min.x && outer.min.y <= inner.min.y && outer.min.z <= inner.min.z &&
+           inner.max.x <= outer.max.x && inner.max.y <= outer.max.y && inner.max.z <= outer.max.z;
 }
 
 }  // namespace
 
 void StaticBvh::build(std::vector<StaticPrimitive> primitives, TaskPool& pool) {
+    ++generation_;
     buildTree(main_, primitives, pool);
     secondary_ = Tree{};
     pending_.clear();
@@ -347,11 +354,13 @@ void StaticBvh::build(std::vector<StaticPrimitive> primitives, TaskPool& pool) {
 
 void StaticBvh::insert(std::span<const StaticPrimitive> primitives) {
     if (primitives.empty()) return;
+    ++generation_;
     pending_.insert(pending_.end(), primitives.begin(), primitives.end());
     secondaryDirty_ = true;
 }
 
 void StaticBvh::remove(std::uint32_t body) {
+    ++generation_;
     if (!main_.primitives.empty()) {
         if (!mainByBodyValid_) {
             mainByBody_.clear();
@@ -426,21 +435,75 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
         out.bodyPairs.clear();
         out.meshPairs.clear();
         out.triangles.clear();
+        const bool keptValid = out.keptGeneration == generation_ && out.keptBegin == begin && out.keptEnd == end;
+        out.grown.resize(end - begin);
+        out.keptStart.resize(end - begin + 1);
+        if (!keptValid) {
+            std::fill(out.grown.begin(), out.grown.end(), kNoBox);
+            std::fill(out.keptStart.begin(), out.keptStart.end(), 0u);
+            out.kept.clear();
+        }
         WorkerScratch& scratch = workers_[std::size_t(worker)];
         std::vector<std::uint64_t>& hits = scratch.hits;
         const PairFilter& mf = filter.moving;
+        const auto boxOf = [&](std::uint32_t i) {
+            return Aabb{{moving.minX[i], moving.minY[i], moving.minZ[i]},
+                        {moving.maxX[i], moving.maxY[i], moving.maxZ[i]}};
+        };
+        // The kept lists are rewritten only when some awake body left its grown box: a resting chunk copies nothing.
+        bool rewrite = !keptValid;
+        for (auto i = std::uint32_t(begin); i < end && !rewrite; ++i)
+            rewrite = !mf.asleep(i) && !contains(out.grown[i - begin], boxOf(i));
+        out.keptNext.clear();
         for (auto i = std::uint32_t(begin); i < end; ++i) {
-            if (mf.asleep(i)) continue;  // asleep vs static (which counts as asleep) is never a pair
-            const QueryRows q({moving.minX[i], moving.minY[i], moving.minZ[i]},
-                              {moving.maxX[i], moving.maxY[i], moving.maxZ[i]});
+            const std::size_t local = i - begin;
+            const bool asleep = mf.asleep(i);  // asleep vs static (which counts as asleep) is never a pair
+            const Aabb box = boxOf(i);
+            const KeptHit* list = out.kept.data() + out.keptStart[local];
+            std::size_t listSize = out.keptStart[local + 1] - out.keptStart[local];
+            if (rewrite) {
+                const std::size_t first = out.keptNext.size();
+                if (asleep || contains(out.grown[local], box)) {
+                    out.keptNext.insert(out.keptNext.end(), list, list + listSize);
+                } else {
+                    const float reach = std::max({box.max.x - box.min.x, box.max.y - box.min.y, box.max.z - box.min.z});
+                    const Vec3 grow = Vec3{1, 1, 1} * (kQueryGrowth * reach);
+                    const Aabb grown{box.min - grow, box.max + grow};
+                    const QueryRows q({grown.min.x, grown.min.y, grown.min.z}, {grown.max.x, grown.max.y, grown.max.z});
+                    const std::size_t walkFirst = out.keptNext.size();
+                    const auto keep = [&](const Node& node, int lane, const PrimitiveRef& p) {
+                        out.keptNext.push_back({std::uint64_t(p.body) << 32 | p.triangle,
+                                                {node.lo[lane], node.lo[4 + lane], node.lo[8 + lane]},
+                                                {node.hi[lane], node.hi[4 + lane], node.hi[8 + lane]}});
+                    };
+                    walk(main_, q, scratch.stack.data(), keep);
+                    walk(secondary_, q, scratch.stack.data(), keep);
+                    // Tree order to the canonical order, whichever tree and leaf held them. Duplicates only arise
+                    // from inserting the same primitive twice.
+                    const auto found = out.keptNext.begin() + std::ptrdiff_t(walkFirst);
+                    std::sort(found, out.keptNext.end(),
+                              [](const KeptHit& x, const KeptHit& y) { return x.key < y.key; });
+                    out.keptNext.erase(std::unique(found, out.keptNext.end(),
+                                                   [](const KeptHit& x, const KeptHit& y) { return x.key == y.key; }),
+                                       out.keptNext.end());
+                    // A grown box with a NaN contains no box, so such a body walks the tree every step.
+                    out.grown[local] = grown;
+                }
+                // keptStart[local + 1] is still the old list's end, which the next body reads before rewriting it.
+                out.keptStart[local] = std::uint32_t(first);
+                list = out.keptNext.data() + first;
+                listSize = out.keptNext.size() - first;
+            }
+            if (asleep) continue;
+            // The exact hits: the kept ones whose boxes overlap the body's own (closed intervals, as the walk).
             hits.clear();
-            collect(main_, q, scratch.stack.data(), hits);
-            collect(secondary_, q, scratch.stack.data(), hits);
+            for (std::size_t h = 0; h < listSize; ++h) {
+                const KeptHit& k = list[h];
+                if (box.min.x <= k.hi[0] && k.lo[0] <= box.max.x && box.min.y <= k.hi[1] && k.lo[1] <= box.max.y &&
+                    box.min.z <= k.hi[2] && k.lo[2] <= box.max.z)
+                    hits.push_back(k.key);
+            }
             if (hits.empty()) continue;
-            // Hits come in tree order; sorting (body, triangle) gives the canonical order, whichever tree and
-            // leaf held them. Duplicates only arise from inserting the same primitive twice.
-            std::sort(hits.begin(), hits.end());
-            hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
 
             const std::uint32_t category = mf.category != nullptr ? mf.category[i] : ~0u;
             const std::uint32_t mask = mf.mask != nullptr ? mf.mask[i] : ~0u;
@@ -466,6 +529,13 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
                 h = runEnd;
             }
         }
+        if (rewrite) {
+            out.keptStart[end - begin] = std::uint32_t(out.keptNext.size());
+            out.kept.swap(out.keptNext);
+        }
+        out.keptGeneration = generation_;
+        out.keptBegin = std::uint32_t(begin);
+        out.keptEnd = std::uint32_t(end);
     });
 
     // Merge in chunk order: the output is the same for any thread count.

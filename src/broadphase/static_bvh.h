@@ -14,6 +14,12 @@
 //    removed primitives, and the main tree's quality never drifts far from a fresh build's.
 // Results never depend on which tree holds a primitive: every query sorts its hits.
 //
+// Queries are coherent across steps: a moving box is looked up grown by an eighth of its size, and the hits of the
+// grown box are kept with their boxes. While the body's box stays inside the grown one and the tree is unchanged,
+// its hits are those kept hits that overlap it: exactly the tree walk's answer (a primitive is reported when its
+// own box overlaps, and every ancestor's box holds its box), found without the walk's cache misses. Resting piles
+// walk the tree almost never.
+//
 // Heightfield triangle numbering (shared with the narrow phase through heightfieldTriangle()): the cell at row r
 // (z) and column c (x) is split along its (x0, z0)-(x1, z1) diagonal into triangle 2 * (r * (columns - 1) + c) + k,
 // k = 0: (p00, p01, p11) and k = 1: (p00, p11, p10), where p<dx><dz> is the sample at column c + dx, row r + dz.
@@ -127,11 +133,23 @@ public:
     const Tree& secondaryTree() const { return secondary_; }
 
 private:
-    /// One query chunk's output, merged in chunk order; kept across steps so a step allocates nothing.
+    /// A primitive that a grown query box overlaps, with the primitive's box.
+    struct KeptHit {
+        std::uint64_t key;  ///< (body << 32) | triangle
+        float lo[3], hi[3];
+    };
+    /// One query chunk's output, merged in chunk order, and its kept hits; kept across steps so a step allocates
+    /// nothing.
     struct ChunkOutput {
         std::vector<BodyPair> bodyPairs;
         std::vector<MeshPair> meshPairs;  ///< firstTriangle relative to this chunk's triangles
         std::vector<std::uint32_t> triangles;
+        /// The tree content and chunk range the kept hits were found for; anything else makes them stale.
+        std::uint64_t keptGeneration = 0;
+        std::uint32_t keptBegin = 0, keptEnd = 0;
+        std::vector<Aabb> grown;               ///< per body of the chunk: the box its hits were found for
+        std::vector<std::uint32_t> keptStart;  ///< per body of the chunk + 1: its range of kept, by key
+        std::vector<KeptHit> kept, keptNext;   ///< this step's list is built in keptNext, then swapped
     };
     struct WorkerScratch {
         std::vector<std::uint64_t> hits;  ///< (body << 32) | triangle of one moving box
@@ -149,6 +167,7 @@ private:
     bool mainByBodyValid_ = false;
     std::uint32_t tombstones_ = 0;
     bool secondaryDirty_ = false;
+    std::uint64_t generation_ = 1;  ///< changes with every edit: kept query hits of another generation are stale
     std::vector<ChunkOutput> chunks_;
     std::vector<WorkerScratch> workers_;
 };

@@ -379,6 +379,57 @@ TEST(StaticBvh, InsertAndRemoveBetweenQueriesWithoutRebuild) {
     EXPECT_TRUE(bvh.empty());
 }
 
+// Queries keep the hits of grown boxes across calls (see static_bvh.h). Boxes that drift a little (and stay inside
+// their grown boxes), jump, grow, fall asleep and wake, with the body count changing between calls, must still get
+// exactly the brute-force answer every time.
+TEST(StaticBvh, KeptHitsFollowMovingBoxes) {
+    const Shape terrain = terrainShape(60, 30);
+    std::vector<StaticPrimitive> prims;
+    appendStaticPrimitives(terrain, {}, 3, prims);
+    TaskPool pool(2);
+    StaticBvh bvh;
+    bvh.build(prims, pool);
+    Bounds moving = randomBoxes(1200, 32, -3, 3, 21, &prims);
+    std::mt19937 rng(22);
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::vector<std::uint8_t> flags(2000, 0);
+    StaticQueryFilter filter;
+    filter.moving.flags = flags.data();
+    filter.moving.asleepBit = 1;
+    std::size_t total = 0;
+    for (int call = 0; call < 40; ++call) {
+        for (std::uint32_t i = 0; i < moving.size(); ++i) {
+            const float h = moving.maxX[i] - moving.minX[i];
+            // Mostly drifts of a hundredth of the size; now and then a jump of up to the size, or a larger box.
+            const float step = (rng() % 10 == 0 ? 1.0f : 0.01f) * h;
+            const float dx = step * u(rng), dy = step * u(rng), dz = step * u(rng);
+            moving.minX[i] += dx, moving.maxX[i] += dx, moving.minY[i] += dy, moving.maxY[i] += dy;
+            moving.minZ[i] += dz, moving.maxZ[i] += dz;
+            if (rng() % 50 == 0) moving.maxY[i] += 0.5f * h;
+            if (rng() % 40 == 0) flags[i] ^= 1;
+        }
+        if (call == 20) {  // fewer bodies: the last chunk ends earlier
+            Bounds fewer = moving;
+            fewer.resize(1000);
+            moving = fewer;
+        }
+        if (call == 30) {  // more bodies again
+            const Bounds extra = randomBoxes(300, 32, -3, 3, 23, &prims);
+            const std::uint32_t n = moving.size();
+            moving.resize(n + 300);
+            for (std::uint32_t i = 0; i < 300; ++i) {
+                moving.minX[n + i] = extra.minX[i], moving.maxX[n + i] = extra.maxX[i];
+                moving.minY[n + i] = extra.minY[i], moving.maxY[n + i] = extra.maxY[i];
+                moving.minZ[n + i] = extra.minZ[i], moving.maxZ[n + i] = extra.maxZ[i];
+            }
+        }
+        const std::vector<Hit> expected = bruteForce(moving, prims, filter);
+        total += expected.size();
+        ASSERT_EQ(flatten(runQuery(bvh, moving, pool, filter)), expected) << "call " << call;
+    }
+    EXPECT_GT(total, 40u * 1000);  // the boxes touch the terrain: the test means something
+}
+
 TEST(StaticBvh, EmptyTreeAndEmptyQuery) {
     TaskPool pool(2);
     StaticBvh bvh;
