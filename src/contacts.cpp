@@ -30,16 +30,20 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
     const std::size_t n = contacts.manifolds.size();
     currentKeys_.resize(n);
     impulses.resize(n * kMaxManifoldPoints);
-    const std::size_t mask = table_.empty() ? 0 : table_.size() - 1;
-    std::vector<std::uint32_t> chunkManifolds(TaskPool::chunkCount(n, kChunk)), chunkPoints(chunkManifolds.size());
+    const std::size_t chunks = TaskPool::chunkCount(n, kChunk);
+    chunkMatches_.assign(chunks, {});
+    chunkMisses_.resize(chunks);
     const auto& slots = storage.slots();
+    // Manifolds come in canonical order, which changes little from step to step: each chunk tries last step's
+    // entry at its own first index, then always the entry after the last match, so a settled scene reads last
+    // step's entries in order. Only the manifolds that guess misses look in the hash table, which is built for
+    // them alone: a settled scene builds none.
     pool.forChunks(n, kChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
-        std::uint32_t manifolds = 0, points = 0;
         std::fill(impulses.begin() + begin * kMaxManifoldPoints, impulses.begin() + end * kMaxManifoldPoints,
                   PointImpulse{});
-        // Manifolds come in canonical order, which changes little from step to step: the entry after the last
-        // match is tried before the table, so a settled scene reads last step's entries in order, not at random.
-        std::size_t next = previous_.size();
+        std::vector<std::uint32_t>& misses = chunkMisses_[chunk];
+        misses.clear();
+        std::size_t next = begin;
         for (std::size_t m = begin; m < end; ++m) {
             const ContactPair& p = contacts.pairs[m];
             const std::uint32_t slotA = slotOf(storage, p.a, p.aStatic), slotB = slotOf(storage, p.b, p.bStatic);
@@ -48,66 +52,72 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
             key.generations = (std::uint64_t{slots[slotA].generation} << 32) | slots[slotB].generation;
             key.parts = (std::uint64_t{p.triangle} << 32) | (std::uint64_t{p.childA} << 16) | p.childB;
             currentKeys_[m] = key;
-            if (table_.empty()) continue;
-            std::uint32_t found = 0;  // entry + 1, 0 for none
+            if (previous_.empty()) continue;
             if (next < previous_.size() && previous_[next].key == key) {
-                found = static_cast<std::uint32_t>(next + 1);
+                carry(contacts.manifolds[m], previous_[next], &impulses[m * kMaxManifoldPoints], chunkMatches_[chunk]);
+                ++next;
             } else {
+                misses.push_back(static_cast<std::uint32_t>(m));
+            }
+        }
+    });
+    std::size_t missCount = 0;
+    for (const std::vector<std::uint32_t>& misses : chunkMisses_) missCount += misses.size();
+    if (missCount > 0) {
+        if (!tableValid_) rebuildTable(pool);
+        const std::size_t mask = table_.size() - 1;
+        pool.forChunks(chunks, 1, [&](std::size_t chunk, std::size_t, std::size_t, int) {
+            for (const std::uint32_t m : chunkMisses_[chunk]) {
+                const ContactKey& key = currentKeys_[m];
                 // Linear probing in a table at most half full: a miss ends at the first empty cell.
                 for (std::size_t at = hashOf(key) & mask;; at = (at + 1) & mask) {
                     const std::uint32_t entry = table_[at];
                     if (entry == 0) break;
                     if (previous_[entry - 1].key == key) {
-                        found = entry;
+                        carry(contacts.manifolds[m], previous_[entry - 1],
+                              &impulses[std::size_t{m} * kMaxManifoldPoints], chunkMatches_[chunk]);
                         break;
                     }
                 }
             }
-            if (found == 0) continue;
-            next = found;  // the entry after this one
-            const Entry& old = previous_[found - 1];
-            ++manifolds;
-            const Manifold& now = contacts.manifolds[m];
-            bool taken[kMaxManifoldPoints] = {};
-            bool matched[kMaxManifoldPoints] = {};
-            for (int i = 0; i < now.pointCount; ++i)
-                for (int j = 0; j < old.pointCount; ++j)
-                    if (!taken[j] && now.points[i].feature == old.features[j]) {
-                        impulses[m * kMaxManifoldPoints + i] = old.impulses[j];
-                        taken[j] = matched[i] = true;
-                        ++points;
-                        break;
-                    }
-            for (int i = 0; i < now.pointCount; ++i) {
-                if (matched[i]) continue;
-                int best = -1;
-                float bestDistanceSq = kContactMatchDistance * kContactMatchDistance;
-                for (int j = 0; j < old.pointCount; ++j) {
-                    const Vec3 d = now.points[i].position - old.positions[j];
-                    const float distanceSq = dot(d, d);
-                    if (!taken[j] && distanceSq < bestDistanceSq) best = j, bestDistanceSq = distanceSq;
-                }
-                if (best < 0) continue;
-                impulses[m * kMaxManifoldPoints + i] = old.impulses[best];
-                taken[best] = true;
-                ++points;
-            }
-        }
-        chunkManifolds[chunk] = manifolds;
-        chunkPoints[chunk] = points;
-    });
+        });
+    }
     matchedManifolds_ = matchedPoints_ = 0;
-    for (std::size_t c = 0; c < chunkManifolds.size(); ++c)
-        matchedManifolds_ += chunkManifolds[c], matchedPoints_ += chunkPoints[c];
+    for (const Matches& c : chunkMatches_) matchedManifolds_ += c.manifolds, matchedPoints_ += c.points;
+}
+
+void ContactCache::carry(const Manifold& now, const Entry& old, PointImpulse* out, Matches& matches) {
+    ++matches.manifolds;
+    bool taken[kMaxManifoldPoints] = {};
+    bool matched[kMaxManifoldPoints] = {};
+    for (int i = 0; i < now.pointCount; ++i)
+        for (int j = 0; j < old.pointCount; ++j)
+            if (!taken[j] && now.points[i].feature == old.features[j]) {
+                out[i] = old.impulses[j];
+                taken[j] = matched[i] = true;
+                ++matches.points;
+                break;
+            }
+    for (int i = 0; i < now.pointCount; ++i) {
+        if (matched[i]) continue;
+        int best = -1;
+        float bestDistanceSq = kContactMatchDistance * kContactMatchDistance;
+        for (int j = 0; j < old.pointCount; ++j) {
+            const Vec3 d = now.points[i].position - old.positions[j];
+            const float distanceSq = dot(d, d);
+            if (!taken[j] && distanceSq < bestDistanceSq) best = j, bestDistanceSq = distanceSq;
+        }
+        if (best < 0) continue;
+        out[i] = old.impulses[best];
+        taken[best] = true;
+        ++matches.points;
+    }
 }
 
 void ContactCache::remember(const Contacts& contacts, const std::vector<PointImpulse>& impulses, TaskPool& pool) {
     const std::size_t n = contacts.manifolds.size();
     previous_.resize(n);
-    std::size_t size = 16;
-    while (size < 2 * n) size *= 2;
-    table_.assign(size, 0);
-    const std::size_t mask = size - 1;
+    tableValid_ = false;
     pool.forChunks(n, kChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t m = begin; m < end; ++m) {
             Entry& e = previous_[m];
@@ -117,15 +127,6 @@ void ContactCache::remember(const Contacts& contacts, const std::vector<PointImp
                 e.features[i] = contacts.manifolds[m].points[i].feature;
                 e.positions[i] = contacts.manifolds[m].points[i].position;
                 e.impulses[i] = impulses[m * kMaxManifoldPoints + i];
-            }
-            // Claim the first free cell of the probe sequence. Which cell a key ends up in may depend on the
-            // threads' timing, but every key is in the table exactly once, so every lookup finds the same entry.
-            for (std::size_t at = hashOf(e.key) & mask;; at = (at + 1) & mask) {
-                std::uint32_t expected = 0;
-                if (std::atomic_ref<std::uint32_t>(table_[at])
-                        .compare_exchange_strong(expected, static_cast<std::uint32_t>(m + 1),
-                                                 std::memory_order_relaxed))
-                    break;
             }
         }
     });
@@ -157,19 +158,28 @@ void ContactCache::restoreForWarmStart(std::span<const KeptManifold> kept) {
             e.impulses[i] = k.impulses[i];
         }
     }
-    rebuildTable();
+    tableValid_ = false;
 }
 
-void ContactCache::rebuildTable() {
+void ContactCache::rebuildTable(TaskPool& pool) {
     std::size_t size = 16;
     while (size < 2 * previous_.size()) size *= 2;
     table_.assign(size, 0);
     const std::size_t mask = size - 1;
-    for (std::size_t m = 0; m < previous_.size(); ++m) {
-        std::size_t at = hashOf(previous_[m].key) & mask;
-        while (table_[at] != 0) at = (at + 1) & mask;
-        table_[at] = static_cast<std::uint32_t>(m + 1);
-    }
+    pool.forChunks(previous_.size(), kChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t m = begin; m < end; ++m) {
+            // Claim the first free cell of the probe sequence. Which cell a key ends up in may depend on the
+            // threads' timing, but every key is in the table exactly once, so every lookup finds the same entry.
+            for (std::size_t at = hashOf(previous_[m].key) & mask;; at = (at + 1) & mask) {
+                std::uint32_t expected = 0;
+                if (std::atomic_ref<std::uint32_t>(table_[at])
+                        .compare_exchange_strong(expected, static_cast<std::uint32_t>(m + 1),
+                                                 std::memory_order_relaxed))
+                    break;
+            }
+        }
+    });
+    tableValid_ = true;
 }
 
 void ContactCache::partnersOf(std::uint32_t slot, std::vector<std::uint32_t>& out) const {

@@ -72,8 +72,6 @@ public:
     std::uint32_t size() const { return static_cast<std::uint32_t>(previous_.size()); }
 
 private:
-    void rebuildTable();
-
     struct Entry {
         ContactKey key;
         std::uint32_t features[kMaxManifoldPoints] = {};
@@ -81,9 +79,20 @@ private:
         PointImpulse impulses[kMaxManifoldPoints];
         int pointCount = 0;
     };
+    struct Matches {
+        std::uint32_t manifolds = 0, points = 0;
+    };
+    /// Hashes every entry of previous_ into table_ (in parallel).
+    void rebuildTable(TaskPool& pool);
+    /// Writes the impulses of the points of `now` that match a point of `old` (by feature, then by position).
+    static void carry(const Manifold& now, const Entry& old, PointImpulse* out, Matches& matches);
+
     std::vector<ContactKey> currentKeys_;  ///< keys of the manifolds passed to warmStart, for remember
     std::vector<Entry> previous_;
     std::vector<std::uint32_t> table_;  ///< open addressing over previous_: index + 1, 0 = empty
+    bool tableValid_ = false;           ///< table_ indexes previous_ as it is now
+    std::vector<Matches> chunkMatches_;
+    std::vector<std::vector<std::uint32_t>> chunkMisses_;  ///< per chunk: manifolds the in-order guess missed
     std::uint32_t matchedManifolds_ = 0, matchedPoints_ = 0;
 };
 

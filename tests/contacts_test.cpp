@@ -3,6 +3,8 @@
 // new take the impulses of an unmatched old point within kContactMatchDistance.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "contacts.h"
 #include "parallel.h"
 
@@ -150,4 +152,60 @@ TEST(ContactCache, StaticSidesAndThreadCountsAgree) {
     ASSERT_EQ(one.size(), two.size());
     for (std::size_t k = 0; k < one.size(); ++k) ASSERT_EQ(one[k].normal, two[k].normal);
     EXPECT_EQ(one[4 * 17 + 1].normal, float(4 * 17 + 1));
+}
+
+TEST(ContactCache, ReorderedInsertedAndRemovedManifoldsMatchByKeyAsBruteForce) {
+    // Last step's manifolds read in order where the order holds, through the hash table where it does not: a step
+    // that drops some pairs, adds new ones and reverses a run must carry exactly what a search by pair finds.
+    BodyStorage storage;
+    std::uint32_t dense;
+    for (int i = 0; i < 400; ++i) storage.allocate(BodySet::Moving, dense);
+    TaskPool pool(2);
+    std::vector<ContactPair> first;
+    for (std::uint32_t a = 0; a < 400; ++a)
+        for (std::uint32_t b = a + 1; b < 400 && first.size() < 6000; b += 7) first.push_back({a, b, false, false});
+    Contacts before;
+    for (const ContactPair& p : first) {
+        before.pairs.push_back(p);
+        before.manifolds.push_back(manifoldWith({p.a % 4, 10 + p.b % 3}));
+    }
+    ContactCache cache;
+    std::vector<PointImpulse> impulses;
+    cache.warmStart(before, storage, pool, impulses);
+    for (std::size_t k = 0; k < impulses.size(); ++k) impulses[k] = {float(k), float(k) + 0.5f, -float(k)};
+    cache.remember(before, impulses, pool);
+    const std::vector<PointImpulse> remembered = impulses;
+
+    std::vector<ContactPair> second;
+    for (std::size_t k = 0; k < first.size(); ++k) {
+        if (k % 7 == 3) continue;  // separated
+        if (k % 11 == 5 && first[k].b + 3 < 400)
+            second.push_back({first[k].a, first[k].b + 3, false, false});  // a new pair
+        second.push_back(first[k]);
+    }
+    std::reverse(second.begin() + 1000, second.begin() + 1300);
+    Contacts after;
+    for (const ContactPair& p : second) {
+        after.pairs.push_back(p);
+        after.manifolds.push_back(manifoldWith({p.a % 4, 10 + p.b % 3}));
+    }
+    cache.warmStart(after, storage, pool, impulses);
+    std::uint32_t matched = 0;
+    for (std::size_t m = 0; m < second.size(); ++m) {
+        const auto old = std::find_if(first.begin(), first.end(),
+                                      [&](const ContactPair& p) { return p.a == second[m].a && p.b == second[m].b; });
+        for (int i = 0; i < kMaxManifoldPoints; ++i) {
+            const PointImpulse expected = old == first.end() || i >= 2
+                                              ? PointImpulse{}
+                                              : remembered[std::size_t(old - first.begin()) * kMaxManifoldPoints + i];
+            const PointImpulse& got = impulses[m * kMaxManifoldPoints + i];
+            ASSERT_EQ(got.normal, expected.normal) << "manifold " << m << " point " << i;
+            ASSERT_EQ(got.tangent1, expected.tangent1);
+            ASSERT_EQ(got.tangent2, expected.tangent2);
+        }
+        matched += old != first.end() ? 1 : 0;
+    }
+    EXPECT_EQ(cache.matchedManifolds(), matched);
+    EXPECT_GT(matched, 4000u);
+    EXPECT_LT(matched, second.size());  // some pairs are new: the table's misses are exercised too
 }
