@@ -13,10 +13,12 @@ namespace rubble::detail {
 namespace {
 
 /// SAP meets about this many boxes per body along its sweep axis before the grid is cheaper. Measured with
-/// `rubble run --broadphase sap|grid` on the standard scenes (2 threads): SAP wins S1-S3, S5 and S6, whose
-/// estimates lie between 70 and 180, by 10-50%; the grid wins S4 (estimate ~600) by 25%. The threshold sits
-/// between, where the two costs cross.
-constexpr float kSweepCandidatesForGrid = 300.0f;
+/// `rubble run --broadphase sap|grid --steps 100` on the standard scenes, whose estimates are S1 189, S2 95,
+/// S3 73-101, S4 540, S5 66-78, S6 69: the grid is faster on S1 (by 12%), S2 (25%), S4, S5 (10%) and S6 (1.3 against
+/// 2.3 ms at one thread: its pyramids fill both horizontal axes, and a sweep along one meets every row), and even
+/// with SAP on S3 while its bodies fall. So the grid is the default from well below them; SAP keeps the sparse and
+/// the long thin worlds, where its kept order makes a step's sort nearly free.
+constexpr float kSweepCandidatesForGrid = 40.0f;
 /// The choice only flips when the estimate crosses the threshold by this factor, so that a scene near the
 /// threshold does not throw away SAP's temporal coherence every other step.
 constexpr float kHysteresis = 1.5f;
