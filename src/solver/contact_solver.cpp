@@ -35,9 +35,11 @@ constexpr std::uint32_t kLargeSegment = ~0u;
 /// Shock propagation: passes over each level's contacts.
 constexpr int kShockPasses = 4;
 
-struct Softness {
-    float biasRate = 0, massScale = 1, impulseScale = 0;
-};
+using Softness = ContactSoftness;
+
+bool isDynamicBody(const MovingBodies& m, std::uint32_t dense) {
+    return (m.flags[dense] & (kFlagKinematic | kFlagFrozen | kFlagAsleep)) == 0 && m.invMass[dense] > 0;
+}
 
 /// A spring-damper contact solved implicitly over the substep h (the soft step's contact): the bias rate,
 /// and how much of the rigid response and of the accumulated impulse each iteration uses.
@@ -150,9 +152,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     bodies_.moving.clear();
     bodyColors_.clear();
     colorOf_.resize(manifoldCount);
-    const auto isDynamic = [&](std::uint32_t dense) {
-        return (m.flags[dense] & (kFlagKinematic | kFlagFrozen | kFlagAsleep)) == 0 && m.invMass[dense] > 0;
-    };
+    const auto isDynamic = [&](std::uint32_t dense) { return isDynamicBody(m, dense); };
     const auto touch = [&](std::uint32_t dense) {
         if (solverIndex_[dense] < 0) {
             solverIndex_[dense] = static_cast<std::int32_t>(bodies_.moving.size());
@@ -265,7 +265,6 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         for (std::uint32_t dense : joints->bodies) touch(dense);
     const std::uint32_t bodyCount = static_cast<std::uint32_t>(bodies_.moving.size());
     bodies_.count = bodyCount;
-    const std::int32_t stillRow = static_cast<std::int32_t>(bodyCount);
     stats_.batches = batchCount;
     stats_.blocks = static_cast<std::uint32_t>(blocks_.size());
     stats_.laneOccupancy =
@@ -282,121 +281,160 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         }
     });
 
-    // Constraint rows, in parallel over batches.
+    // Constraint rows. A block's rows are built in the block's own task, just before its warm start reads them while
+    // they are still in the core's cache (see forEachColor); the large islands' rows are built here, in parallel.
+    // Nothing the rows read changes between here and the first solve. Shock propagation reads every row here.
     batches_.resize(batchCount);
     const float invH = 1.0f / h;
     const float hertz = std::min(settings_.contactHertz, 0.25f * invH);
-    const Softness dynamicSoft = soft(hertz, settings_.contactDampingRatio, h);
-    const Softness staticSoft = soft(2.0f * hertz, settings_.contactDampingRatio, h);
-    const Softness stiff{settings_.baumgarte * invH, 1.0f, 0.0f};
     const bool softStep = settings_.positionCorrection == PositionCorrection::SoftStep;
-    // Soft contacts are damped springs from the first millimetre: a dead zone would only add to the sag of stacks.
-    const float slop = softStep ? 0.0f : settings_.linearSlop;
-    const bool warmStarting = settings_.warmStarting;
-    pool.forChunks(batchCount, kManifoldChunk / kBatchLanes, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-        // A colour's manifolds lie far apart in manifold order, so no hardware prefetcher follows the lanes: the
-        // manifold, pair and carried impulses of the lane kPrefetchLanes ahead are fetched while this one is built
-        // (a few lanes at a time: a whole batch's worth of prefetches would overrun the core's miss buffers).
-        constexpr std::size_t kPrefetchLanes = 4;
-        const auto prefetchLane = [&](std::size_t at) __attribute__((always_inline)) {
-            if (at >= manifoldOfLane_.size()) return;
-            const std::uint32_t k = manifoldOfLane_[at];
-            if (k != ~0u) prefetchManifold(contacts, warm, warmStarting, k);
-        };
-        for (std::size_t lane = 0; lane < kPrefetchLanes; ++lane) prefetchLane(begin * kBatchLanes + lane);
-        for (std::size_t bi = begin; bi < end; ++bi) {
-            ContactBatch& b = batches_[bi];
-            b.pointCount = batchPoints_[bi];
-            std::memset(static_cast<void*>(&b), 0, offsetof(ContactBatch, pointCount));
-            std::memset(static_cast<void*>(&b.nx), 0,
-                        offsetof(ContactBatch, points) - offsetof(ContactBatch, nx) +
-                            sizeof(ContactBatch::Point) * static_cast<std::size_t>(b.pointCount));
-            BatchInputs lanes;
-            for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
-                b.bodyA[lane] = b.bodyB[lane] = stillRow;
-                prefetchLane(bi * kBatchLanes + lane + kPrefetchLanes);
-                const std::uint32_t k = manifoldOfLane_[bi * kBatchLanes + lane];
-                if (k == ~0u) continue;
-                const ContactPair& pair = contacts.pairs[k];
-                const Manifold& mf = contacts.manifolds[k];
-                // Side data: position, velocities, inverse mass and world inverse inertia.
-                struct Side {
-                    Vec3 p, v, w;
-                    float invMass = 0, friction = 0, restitution = 0;
-                    simd::SymMat3W<float> inertia{0, 0, 0, 0, 0, 0};
-                    std::int32_t row = 0;
-                    bool dynamic = false;
-                };
-                const auto side = [&](std::uint32_t dense, bool isStatic) {
-                    Side sd;
-                    if (isStatic) {
-                        sd.p = {s.px[dense], s.py[dense], s.pz[dense]};
-                        sd.friction = s.friction[dense];
-                        sd.restitution = s.restitution[dense];
-                        sd.row = stillRow;
-                        return sd;
-                    }
-                    sd.p = {m.px[dense], m.py[dense], m.pz[dense]};
-                    sd.v = {m.vx[dense], m.vy[dense], m.vz[dense]};
-                    sd.w = {m.wx[dense], m.wy[dense], m.wz[dense]};
-                    sd.friction = m.friction[dense];
-                    sd.restitution = m.restitution[dense];
-                    sd.row = solverIndex_[dense];
-                    sd.dynamic = isDynamic(dense);
-                    if (sd.dynamic) {
-                        sd.invMass = m.invMass[dense];
-                        if (rotation_)
-                            sd.inertia =
-                                simd::SymMat3W<float>::load(m.iwXX.data(), m.iwYY.data(), m.iwZZ.data(), m.iwXY.data(),
-                                                            m.iwXZ.data(), m.iwYZ.data(), dense);
-                    }
+    build_ = {&contacts, &warm, &storage, soft(hertz, settings_.contactDampingRatio, h),
+              soft(2.0f * hertz, settings_.contactDampingRatio, h), Softness{settings_.baumgarte * invH, 1.0f, 0.0f},
+              softStep,
+              // Soft contacts are damped springs from the first millimetre: a dead zone would only add to the sag
+              // of stacks.
+              softStep ? 0.0f : settings_.linearSlop, settings_.warmStarting, bounce};
+    pool_ = &pool;
+    blocksPending_ = !blocks_.empty();
+    if (large_.colorCount > 0) {
+        const std::uint32_t first = colors_[large_.firstColor].firstBatch;
+        const ColorRange& lastRange = colors_[large_.firstColor + large_.colorCount - 1];
+        pool.forChunks(lastRange.firstBatch + lastRange.batchCount - first, kManifoldChunk / kBatchLanes,
+                       [&](std::size_t, std::size_t begin, std::size_t end, int) {
+                           buildBatches(first + static_cast<std::uint32_t>(begin),
+                                        first + static_cast<std::uint32_t>(end));
+                       });
+    }
+    shockOrder_.clear();
+    if (settings_.shockPropagation) {
+        buildPendingBlocks();
+        orderForShock();
+    }
+}
+
+void ContactSolver::buildBlock(std::size_t block) {
+    const ColorSpan span = blocks_[block];
+    const ColorRange& lastRange = colors_[span.firstColor + span.colorCount - 1];
+    buildBatches(colors_[span.firstColor].firstBatch, lastRange.firstBatch + lastRange.batchCount);
+}
+
+void ContactSolver::buildPendingBlocks() {
+    if (!blocksPending_) return;
+    pool_->forChunks(blocks_.size(), 1, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t block = begin; block < end; ++block) buildBlock(block);
+    });
+    blocksPending_ = false;
+}
+
+void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
+    const Contacts& contacts = *build_.contacts;
+    const std::vector<PointImpulse>& warm = *build_.warm;
+    const MovingBodies& m = build_.storage->moving;
+    const StaticBodies& s = build_.storage->statics;
+    const std::int32_t stillRow = static_cast<std::int32_t>(bodies_.count);
+    const bool warmStarting = build_.warmStarting, bounce = build_.bounce, softStep = build_.softStep;
+    const Softness &dynamicSoft = build_.dynamicSoft, &staticSoft = build_.staticSoft, &stiff = build_.stiff;
+    const float slop = build_.slop;
+    const auto isDynamic = [&](std::uint32_t dense) { return isDynamicBody(m, dense); };
+    // A colour's manifolds lie far apart in manifold order, so no hardware prefetcher follows the lanes: the
+    // manifold, pair and carried impulses of the lane kPrefetchLanes ahead are fetched while this one is built
+    // (a few lanes at a time: a whole batch's worth of prefetches would overrun the core's miss buffers).
+    constexpr std::size_t kPrefetchLanes = 4;
+    const auto prefetchLane = [&](std::size_t at) __attribute__((always_inline)) {
+        if (at >= manifoldOfLane_.size()) return;
+        const std::uint32_t k = manifoldOfLane_[at];
+        if (k != ~0u) prefetchManifold(contacts, warm, warmStarting, k);
+    };
+    for (std::size_t lane = 0; lane < kPrefetchLanes; ++lane) prefetchLane(begin * kBatchLanes + lane);
+    for (std::size_t bi = begin; bi < end; ++bi) {
+        ContactBatch& b = batches_[bi];
+        b.pointCount = batchPoints_[bi];
+        std::memset(static_cast<void*>(&b), 0, offsetof(ContactBatch, pointCount));
+        std::memset(static_cast<void*>(&b.nx), 0,
+                    offsetof(ContactBatch, points) - offsetof(ContactBatch, nx) +
+                        sizeof(ContactBatch::Point) * static_cast<std::size_t>(b.pointCount));
+        BatchInputs lanes;
+        for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
+            b.bodyA[lane] = b.bodyB[lane] = stillRow;
+            prefetchLane(bi * kBatchLanes + lane + kPrefetchLanes);
+            const std::uint32_t k = manifoldOfLane_[bi * kBatchLanes + lane];
+            if (k == ~0u) continue;
+            const ContactPair& pair = contacts.pairs[k];
+            const Manifold& mf = contacts.manifolds[k];
+            // Side data: position, velocities, inverse mass and world inverse inertia.
+            struct Side {
+                Vec3 p, v, w;
+                float invMass = 0, friction = 0, restitution = 0;
+                simd::SymMat3W<float> inertia{0, 0, 0, 0, 0, 0};
+                std::int32_t row = 0;
+                bool dynamic = false;
+            };
+            const auto side = [&](std::uint32_t dense, bool isStatic) {
+                Side sd;
+                if (isStatic) {
+                    sd.p = {s.px[dense], s.py[dense], s.pz[dense]};
+                    sd.friction = s.friction[dense];
+                    sd.restitution = s.restitution[dense];
+                    sd.row = stillRow;
                     return sd;
-                };
-                const Side A = side(pair.a, pair.aStatic), B = side(pair.b, pair.bStatic);
-                b.bodyA[lane] = A.row;
-                b.bodyB[lane] = B.row;
-                const Vec3 n = mf.normal;
-                b.nx[lane] = n.x, b.ny[lane] = n.y, b.nz[lane] = n.z;
-                b.invMassA[lane] = A.invMass;
-                b.invMassB[lane] = B.invMass;
-                A.inertia.store(b.iaXX, b.iaYY, b.iaZZ, b.iaXY, b.iaXZ, b.iaYZ, lane);
-                B.inertia.store(b.ibXX, b.ibYY, b.ibZZ, b.ibXY, b.ibXZ, b.ibYZ, lane);
-                // Geometric mean for friction (a frictionless surface is frictionless against anything), the
-                // larger restitution (a ball bounces off a floor that does not).
-                b.friction[lane] = friction_ ? std::sqrt(A.friction * B.friction) : 0.0f;
-                b.restitution[lane] = bounce ? std::max(A.restitution, B.restitution) : 0.0f;
-                const Softness sn = !softStep ? stiff : (A.dynamic && B.dynamic ? dynamicSoft : staticSoft);
-                b.biasRate[lane] = sn.biasRate;
-                b.massScale[lane] = sn.massScale;
-                b.impulseScale[lane] = sn.impulseScale;
-                b.slop[lane] = slop;
-                lanes.used[lane] = 1.0f;
-                lanes.vAx[lane] = A.v.x, lanes.vAy[lane] = A.v.y, lanes.vAz[lane] = A.v.z;
-                lanes.wAx[lane] = A.w.x, lanes.wAy[lane] = A.w.y, lanes.wAz[lane] = A.w.z;
-                lanes.vBx[lane] = B.v.x, lanes.vBy[lane] = B.v.y, lanes.vBz[lane] = B.v.z;
-                lanes.wBx[lane] = B.w.x, lanes.wBy[lane] = B.w.y, lanes.wBz[lane] = B.w.z;
-                for (int i = 0; i < mf.pointCount; ++i) {
-                    const ContactPoint& cp = mf.points[i];
-                    ContactBatch::Point& pt = b.points[i];
-                    // The point lies on B's surface; A's anchor is the same world point.
-                    const Vec3 rA = cp.position - A.p, rB = cp.position - B.p;
-                    pt.rAx[lane] = rA.x, pt.rAy[lane] = rA.y, pt.rAz[lane] = rA.z;
-                    pt.rBx[lane] = rB.x, pt.rBy[lane] = rB.y, pt.rBz[lane] = rB.z;
-                    pt.separation[lane] = -cp.depth;
-                    lanes.point[i][lane] = 1.0f;
-                    if (warmStarting) {
-                        const PointImpulse& carried = warm[k * kMaxManifoldPoints + i];
-                        pt.normalImpulse[lane] = carried.normal;
-                        pt.tangentImpulse1[lane] = friction_ ? carried.tangent1 : 0.0f;
-                        pt.tangentImpulse2[lane] = friction_ ? carried.tangent2 : 0.0f;
-                    }
+                }
+                sd.p = {m.px[dense], m.py[dense], m.pz[dense]};
+                sd.v = {m.vx[dense], m.vy[dense], m.vz[dense]};
+                sd.w = {m.wx[dense], m.wy[dense], m.wz[dense]};
+                sd.friction = m.friction[dense];
+                sd.restitution = m.restitution[dense];
+                sd.row = solverIndex_[dense];
+                sd.dynamic = isDynamic(dense);
+                if (sd.dynamic) {
+                    sd.invMass = m.invMass[dense];
+                    if (rotation_)
+                        sd.inertia = simd::SymMat3W<float>::load(m.iwXX.data(), m.iwYY.data(), m.iwZZ.data(),
+                                                                 m.iwXY.data(), m.iwXZ.data(), m.iwYZ.data(), dense);
+                }
+                return sd;
+            };
+            const Side A = side(pair.a, pair.aStatic), B = side(pair.b, pair.bStatic);
+            b.bodyA[lane] = A.row;
+            b.bodyB[lane] = B.row;
+            const Vec3 n = mf.normal;
+            b.nx[lane] = n.x, b.ny[lane] = n.y, b.nz[lane] = n.z;
+            b.invMassA[lane] = A.invMass;
+            b.invMassB[lane] = B.invMass;
+            A.inertia.store(b.iaXX, b.iaYY, b.iaZZ, b.iaXY, b.iaXZ, b.iaYZ, lane);
+            B.inertia.store(b.ibXX, b.ibYY, b.ibZZ, b.ibXY, b.ibXZ, b.ibYZ, lane);
+            // Geometric mean for friction (a frictionless surface is frictionless against anything), the
+            // larger restitution (a ball bounces off a floor that does not).
+            b.friction[lane] = friction_ ? std::sqrt(A.friction * B.friction) : 0.0f;
+            b.restitution[lane] = bounce ? std::max(A.restitution, B.restitution) : 0.0f;
+            const Softness sn = !softStep ? stiff : (A.dynamic && B.dynamic ? dynamicSoft : staticSoft);
+            b.biasRate[lane] = sn.biasRate;
+            b.massScale[lane] = sn.massScale;
+            b.impulseScale[lane] = sn.impulseScale;
+            b.slop[lane] = slop;
+            lanes.used[lane] = 1.0f;
+            lanes.vAx[lane] = A.v.x, lanes.vAy[lane] = A.v.y, lanes.vAz[lane] = A.v.z;
+            lanes.wAx[lane] = A.w.x, lanes.wAy[lane] = A.w.y, lanes.wAz[lane] = A.w.z;
+            lanes.vBx[lane] = B.v.x, lanes.vBy[lane] = B.v.y, lanes.vBz[lane] = B.v.z;
+            lanes.wBx[lane] = B.w.x, lanes.wBy[lane] = B.w.y, lanes.wBz[lane] = B.w.z;
+            for (int i = 0; i < mf.pointCount; ++i) {
+                const ContactPoint& cp = mf.points[i];
+                ContactBatch::Point& pt = b.points[i];
+                // The point lies on B's surface; A's anchor is the same world point.
+                const Vec3 rA = cp.position - A.p, rB = cp.position - B.p;
+                pt.rAx[lane] = rA.x, pt.rAy[lane] = rA.y, pt.rAz[lane] = rA.z;
+                pt.rBx[lane] = rB.x, pt.rBy[lane] = rB.y, pt.rBz[lane] = rB.z;
+                pt.separation[lane] = -cp.depth;
+                lanes.point[i][lane] = 1.0f;
+                if (warmStarting) {
+                    const PointImpulse& carried = warm[k * kMaxManifoldPoints + i];
+                    pt.normalImpulse[lane] = carried.normal;
+                    pt.tangentImpulse1[lane] = friction_ ? carried.tangent1 : 0.0f;
+                    pt.tangentImpulse2[lane] = friction_ ? carried.tangent2 : 0.0f;
                 }
             }
-            finishBatch(b, lanes, friction_);
         }
-    });
-    shockOrder_.clear();
-    if (settings_.shockPropagation) orderForShock();
+        finishBatch(b, lanes, friction_);
+    }
 }
 
 void ContactSolver::loadBodies(const MovingBodies& m, TaskPool& pool) {
@@ -457,16 +495,20 @@ void ContactSolver::solveRange(const ColorRange& range, const BodyRows& rows, Ke
 template <class Kernel>
 void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel, int passes, const JointPass* joints) {
     // Blocks share no body with each other or with the large islands: each runs all its iterations in one task.
-    if (!blocks_.empty())
+    if (!blocks_.empty()) {
         pool.forChunks(blocks_.size(), 1, [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
             const BodyRows rows = rowsFor(worker);
-            for (std::size_t bl = begin; bl < end; ++bl)
+            for (std::size_t bl = begin; bl < end; ++bl) {
+                if (blocksPending_) buildBlock(bl);
                 for (int pass = 0; pass < passes; ++pass) {
                     if (joints) (*joints)(static_cast<std::uint32_t>(bl), pass);
                     for (std::uint32_t c = 0; c < blocks_[bl].colorCount; ++c)
                         solveRange(colors_[blocks_[bl].firstColor + c], rows, kernel, pass);
                 }
+            }
         });
+        blocksPending_ = false;
+    }
     for (int pass = 0; pass < passes; ++pass) {
         if (joints) (*joints)(static_cast<std::uint32_t>(blocks_.size()), pass);
         for (std::uint32_t c = 0; c < large_.colorCount; ++c) {
@@ -706,6 +748,7 @@ void ContactSolver::solvePositions(TaskPool& pool, int iterations) {
 }
 
 void ContactSolver::applyPseudoVelocities(MovingBodies& m, TaskPool& pool) {
+    buildPendingBlocks();
     SolverBodies& b = bodies_;
     const float h = h_;
     pool.forChunks(b.count, kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
@@ -740,7 +783,8 @@ void ContactSolver::applyRestitution(TaskPool& pool) {
     });
 }
 
-void ContactSolver::storeImpulses(std::vector<PointImpulse>& impulses, TaskPool& pool) const {
+void ContactSolver::storeImpulses(std::vector<PointImpulse>& impulses, TaskPool& pool) {
+    buildPendingBlocks();
     // Manifolds without a dynamic body have no lane and keep zero; every other manifold is in exactly one lane, so
     // the batches write disjoint entries and run on any thread.
     pool.forChunks(impulses.size(), kManifoldChunk * kMaxManifoldPoints,

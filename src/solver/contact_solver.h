@@ -60,6 +60,12 @@ inline std::uint64_t jointedPairKey(std::uint32_t slotA, std::uint32_t slotB) {
     return slotA < slotB ? (std::uint64_t{slotA} << 32 | slotB) : (std::uint64_t{slotB} << 32 | slotA);
 }
 
+/// A contact's softness for one substep: the bias rate, and how much of the rigid response and of the accumulated
+/// impulse each iteration uses (rigid: {baumgarte / h, 1, 0}).
+struct ContactSoftness {
+    float biasRate = 0, massScale = 1, impulseScale = 0;
+};
+
 struct ContactSolverStats {
     std::uint32_t constraints = 0;  ///< manifolds with at least one dynamic body
     std::uint32_t colors = 0;       ///< the most colours any block or the large islands needed
@@ -119,7 +125,7 @@ public:
     /// Bounces: approach speeds above the threshold are reversed by the restitution coefficient.
     void applyRestitution(TaskPool& pool);
     /// The final accumulated impulses, in manifold order, for the contact cache (in parallel over the batches).
-    void storeImpulses(std::vector<PointImpulse>& impulses, TaskPool& pool) const;
+    void storeImpulses(std::vector<PointImpulse>& impulses, TaskPool& pool);
 
     const ContactSolverStats& stats() const { return stats_; }
     struct ColorRange {
@@ -134,7 +140,10 @@ public:
         std::uint32_t colorCount = 0;
     };
     /// Prepared batches and the colour ranges, for tests: the blocks' colours, then the large islands' colours.
-    const std::vector<ContactBatch>& batches() const { return batches_; }
+    const std::vector<ContactBatch>& batches() {
+        buildPendingBlocks();
+        return batches_;
+    }
     const std::vector<ColorRange>& colorRanges() const { return colors_; }
     const std::vector<ColorSpan>& blocks() const { return blocks_; }
     ColorSpan largeIslands() const { return large_; }
@@ -152,6 +161,11 @@ private:
     /// Lists the manifolds by block (blocks_ spans, then large_), into segmentManifolds_ / segmentStart_.
     void partition(const Contacts& contacts, const Islands* islands);
     BodyRows rowsFor(int worker);
+    /// Builds the constraint rows of batches [begin, end) from the inputs prepare() kept.
+    void buildBatches(std::uint32_t begin, std::uint32_t end);
+    void buildBlock(std::size_t block);
+    /// Builds the blocks' rows now if no solve has built them yet (in parallel).
+    void buildPendingBlocks();
     void orderForShock();
 
     /// A contact of the shock pass: where its manifold sits, and which side is held still (0 = A, 1 = B).
@@ -165,6 +179,20 @@ private:
     void computeHeldMasses(ShockContact& s) const;
     void solveHeld(const ShockContact& s, const BodyRows& rows, const SolveParams& params);
 
+    /// What building the rows reads, kept from prepare() to the first solve, which builds the blocks' rows.
+    struct BuildInputs {
+        const Contacts* contacts = nullptr;
+        const std::vector<PointImpulse>* warm = nullptr;
+        const BodyStorage* storage = nullptr;
+        ContactSoftness dynamicSoft, staticSoft, stiff;
+        bool softStep = false;
+        float slop = 0;
+        bool warmStarting = true;
+        bool bounce = false;
+    };
+    BuildInputs build_;
+    TaskPool* pool_ = nullptr;
+    bool blocksPending_ = false;  ///< the blocks' rows are still to be built
     SolverSettings settings_;
     float h_ = 0;
     bool friction_ = true;
