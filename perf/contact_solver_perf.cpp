@@ -25,6 +25,7 @@ constexpr std::size_t kManifolds = 20000;
 struct Problem {
     std::vector<ContactBatch> batches;
     std::vector<BodyRow> velocity, motion, pseudo;
+    std::vector<rubble::detail::MassRow> mass;
 
     Problem() {
         std::mt19937 rng(42);
@@ -39,8 +40,9 @@ struct Problem {
                      {0.01f * u(rng), 0.01f * u(rng), 0.01f * u(rng)}};
             (*rows)[kBodies] = BodyRow{};  // the still row
         }
+        rubble::test::fillRandomMassRows(mass, kBodies + 2, kBodies, rng);
     }
-    BodyRows bodyRows() { return {velocity.data(), motion.data(), pseudo.data(), kBodies + 1}; }
+    BodyRows bodyRows() { return {velocity.data(), motion.data(), pseudo.data(), mass.data(), kBodies + 1}; }
 };
 
 void BM_ContactSolveWide(benchmark::State& state) {

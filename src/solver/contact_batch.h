@@ -14,11 +14,12 @@ namespace rubble::detail {
 
 inline constexpr std::size_t kBatchLanes = simd::kLanes;
 
-/// Up to kBatchLanes manifolds in SoA form. A lane with no manifold, and a point beyond a manifold's count, has
-/// zero masses, so every impulse it computes is zero. Points at pointCount and beyond are in no lane and are never
-/// read: the kernels stop there, so that a batch of one-point contacts (spheres, capsules on a mesh) costs a quarter
-/// of a batch of boxes. Static bodies read the still row; only dynamic bodies are
-/// written back (the kernels redirect other writes to a scratch row).
+/// Up to kBatchLanes manifolds in SoA form. The bodies' masses are not here but in their mass rows (MassRow), read
+/// by body index like the velocities: a lane with no manifold meets the still row on both sides, whose masses are
+/// zero, and a point beyond a manifold's count has zero effective masses, so every impulse they compute is zero. Points
+/// at pointCount and beyond are in no lane and are never read: the kernels stop there, so that a batch of one-point
+/// contacts (spheres, capsules on a mesh) costs a quarter of a batch of boxes. Static bodies read the still row; only
+/// dynamic bodies are written back (the kernels redirect other writes to a scratch row).
 struct alignas(64) ContactBatch {
     using Lanes = float[kBatchLanes];
     std::int32_t bodyA[kBatchLanes];
@@ -27,9 +28,6 @@ struct alignas(64) ContactBatch {
     Lanes nx, ny, nz;         ///< normal, from A to B
     Lanes t1x, t1y, t1z;      ///< friction directions: t1, t2, n right-handed
     Lanes t2x, t2y, t2z;
-    Lanes invMassA, invMassB;
-    Lanes iaXX, iaYY, iaZZ, iaXY, iaXZ, iaYZ;  ///< world inverse inertia of A
-    Lanes ibXX, ibYY, ibZZ, ibXY, ibXZ, ibYZ;
     Lanes friction, restitution;
     Lanes biasRate;      ///< overlap fed back as approach speed, 1/s
     Lanes massScale;     ///< soft constraint: share of the rigid response...
@@ -58,11 +56,24 @@ struct alignas(32) BodyRow {
 static_assert(sizeof(BodyRow) == simd::kRowFloats * sizeof(float) && offsetof(BodyRow, angular) == 3 * sizeof(float),
               "a body row is eight floats: the transposes read it as such");
 
+/// One body's masses in the solver's working set: the world inverse inertia (xx, yy, zz, xy, xz, yz) and the inverse
+/// mass, zero for bodies that cannot move, 32 bytes so that the wide kernels transpose 16 of them into lanes as they
+/// do velocity rows. Kept per body rather than per lane: a body in five manifolds is five lanes, and the rows a batch
+/// streams through every iteration shrink by a quarter.
+struct alignas(32) MassRow {
+    float inverseInertia[6] = {0, 0, 0, 0, 0, 0};
+    float inverseMass = 0;
+    float pad = 0;
+};
+static_assert(sizeof(MassRow) == simd::kRowFloats * sizeof(float),
+              "a mass row is eight floats: the transposes read it");
+
 /// Row arrays of SolverBodies, with the scratch row this worker may write.
 struct BodyRows {
     BodyRow* velocity;
     const BodyRow* motion;
     BodyRow* pseudo;
+    const MassRow* mass;
     std::int32_t scratchRow;
 };
 
@@ -122,16 +133,17 @@ template <class F>
     simd::storeRowsTransposed(reinterpret_cast<float*>(rows), index, c);
 }
 
+/// Inverse mass and world inverse inertia of the bodies index[k], in lanes.
 template <class F>
-simd::SymMat3W<F> inertiaA(const ContactBatch& b, std::size_t lane) {
-    return {at<F>(b.iaXX, lane), at<F>(b.iaYY, lane), at<F>(b.iaZZ, lane),
-            at<F>(b.iaXY, lane), at<F>(b.iaXZ, lane), at<F>(b.iaYZ, lane)};
-}
-
+struct MassW {
+    F inverseMass;
+    simd::SymMat3W<F> inverseInertia;
+};
 template <class F>
-simd::SymMat3W<F> inertiaB(const ContactBatch& b, std::size_t lane) {
-    return {at<F>(b.ibXX, lane), at<F>(b.ibYY, lane), at<F>(b.ibZZ, lane),
-            at<F>(b.ibXY, lane), at<F>(b.ibXZ, lane), at<F>(b.ibYZ, lane)};
+[[gnu::always_inline]] inline MassW<F> loadMasses(const MassRow* rows, const std::int32_t* index) {
+    F c[simd::kRowFloats];
+    simd::loadRowsTransposed(reinterpret_cast<const float*>(rows), index, c);
+    return {c[6], {c[0], c[1], c[2], c[3], c[4], c[5]}};
 }
 
 /// The two bodies of a batch as loaded from the rows, and where to write them back.
@@ -142,19 +154,18 @@ struct Pair {
     F mA, mB;
     simd::SymMat3W<F> iA, iB;
 
-    Pair(const ContactBatch& b, std::size_t lane, const BodyRow* rows, std::int32_t scratchRow) {
+    Pair(const ContactBatch& b, std::size_t lane, const BodyRow* rows, const MassRow* mass, std::int32_t scratchRow) {
         readA = simd::loadInt<IndexOf<F>>(b.bodyA + lane);
         readB = simd::loadInt<IndexOf<F>>(b.bodyB + lane);
-        mA = at<F>(b.invMassA, lane);
-        mB = at<F>(b.invMassB, lane);
+        const MassW<F> massA = loadMasses<F>(mass, b.bodyA + lane), massB = loadMasses<F>(mass, b.bodyB + lane);
+        mA = massA.inverseMass, iA = massA.inverseInertia;
+        mB = massB.inverseMass, iB = massB.inverseInertia;
         const IndexOf<F> scratch(scratchRow);
         writeA = simd::select(mA > F(0.0f), readA, scratch);
         writeB = simd::select(mB > F(0.0f), readB, scratch);
         const RowW<F> a = loadRows<F>(rows, b.bodyA + lane), c = loadRows<F>(rows, b.bodyB + lane);
         vA = a.linear, wA = a.angular;
         vB = c.linear, wB = c.angular;
-        iA = inertiaA<F>(b, lane);
-        iB = inertiaB<F>(b, lane);
     }
 
     void store(BodyRow* rows) const {
@@ -195,7 +206,7 @@ Vec3W<F> anchorB(const ContactBatch::Point& p, std::size_t lane) {
 /// Applies the accumulated impulses of every point.
 template <class F>
 void warmStart(ContactBatch& b, std::size_t lane, const BodyRows& rows) {
-    Pair<F> pair(b, lane, rows.velocity, rows.scratchRow);
+    Pair<F> pair(b, lane, rows.velocity, rows.mass, rows.scratchRow);
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
     const Vec3W<F> t1 = at3<F>(b.t1x, b.t1y, b.t1z, lane);
     const Vec3W<F> t2 = at3<F>(b.t2x, b.t2y, b.t2z, lane);
@@ -220,7 +231,7 @@ F separation(const ContactBatch::Point& p, std::size_t lane, const Vec3W<F>& n, 
 /// normal impulses, Gauss-Seidel within the manifold.
 template <class F, bool Friction>
 void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveParams& params) {
-    Pair<F> pair(b, lane, rows.velocity, rows.scratchRow);
+    Pair<F> pair(b, lane, rows.velocity, rows.mass, rows.scratchRow);
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
     if constexpr (Friction) {
         const Vec3W<F> t1 = at3<F>(b.t1x, b.t1y, b.t1z, lane);
@@ -281,7 +292,7 @@ void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveP
 /// substep and are then forgotten, so that push-out never becomes kinetic energy.
 template <class F>
 void solvePositions(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveParams& params) {
-    Pair<F> pair(b, lane, rows.pseudo, rows.scratchRow);
+    Pair<F> pair(b, lane, rows.pseudo, rows.mass, rows.scratchRow);
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
     const RowW<F> motionA = loadRows<F>(rows.motion, b.bodyA + lane);
     const RowW<F> motionB = loadRows<F>(rows.motion, b.bodyB + lane);
@@ -304,7 +315,7 @@ void solvePositions(ContactBatch& b, std::size_t lane, const BodyRows& rows, con
 /// Reverses approach speeds above the threshold by the restitution coefficient, at points that pushed this step.
 template <class F>
 void restitution(ContactBatch& b, std::size_t lane, const BodyRows& rows, float threshold) {
-    Pair<F> pair(b, lane, rows.velocity, rows.scratchRow);
+    Pair<F> pair(b, lane, rows.velocity, rows.mass, rows.scratchRow);
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
     const F e = at<F>(b.restitution, lane);
     for (ContactBatch::Point& p : pointsOf(b)) {

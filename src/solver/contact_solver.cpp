@@ -79,7 +79,7 @@ struct BatchInputs {
 
 /// The lane-parallel part of building a batch, in SIMD over its manifolds: friction directions, effective masses
 /// and approach speeds.
-void finishBatch(ContactBatch& b, const BatchInputs& in, bool friction) {
+void finishBatch(ContactBatch& b, const BatchInputs& in, const MassRow* mass, bool friction) {
     using F = simd::FloatW;
     using contact_kernels::at;
     using contact_kernels::at3;
@@ -104,8 +104,10 @@ void finishBatch(ContactBatch& b, const BatchInputs& in, bool friction) {
     put(b.t1x, 0, t1Used.x), put(b.t1y, 0, t1Used.y), put(b.t1z, 0, t1Used.z);
     put(b.t2x, 0, t2Used.x), put(b.t2y, 0, t2Used.y), put(b.t2z, 0, t2Used.z);
 
-    const F mA = at<F>(b.invMassA, 0), mB = at<F>(b.invMassB, 0);
-    const simd::SymMat3W<F> iA = contact_kernels::inertiaA<F>(b, 0), iB = contact_kernels::inertiaB<F>(b, 0);
+    const contact_kernels::MassW<F> massA = contact_kernels::loadMasses<F>(mass, b.bodyA);
+    const contact_kernels::MassW<F> massB = contact_kernels::loadMasses<F>(mass, b.bodyB);
+    const F mA = massA.inverseMass, mB = massB.inverseMass;
+    const simd::SymMat3W<F>&iA = massA.inverseInertia, &iB = massB.inverseInertia;
     const simd::Vec3W<F> vA = at3<F>(in.vAx, in.vAy, in.vAz, 0), wA = at3<F>(in.wAx, in.wAy, in.wAz, 0);
     const simd::Vec3W<F> vB = at3<F>(in.vBx, in.vBy, in.vBz, 0), wB = at3<F>(in.wBx, in.wBy, in.wBz, 0);
     for (int i = 0; i < b.pointCount; ++i) {
@@ -272,12 +274,18 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     // Body rows: the touched bodies, the still row, one scratch row per worker.
     const std::size_t rows = bodyCount + 1 + static_cast<std::size_t>(scratchRows_);
     for (auto* a : {&bodies_.velocity, &bodies_.motion, &bodies_.pseudo}) a->assign(rows, BodyRow{});
+    bodies_.mass.assign(rows, MassRow{});
     for (auto* a : {&p0x_, &p0y_, &p0z_, &q0x_, &q0y_, &q0z_, &q0w_}) a->resize(bodyCount);
     pool.forChunks(bodyCount, kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t i = begin; i < end; ++i) {
             const std::uint32_t d = bodies_.moving[i];
             p0x_[i] = m.px[d], p0y_[i] = m.py[d], p0z_[i] = m.pz[d];
             q0x_[i] = m.qx[d], q0y_[i] = m.qy[d], q0z_[i] = m.qz[d], q0w_[i] = m.qw[d];
+            if (!isDynamic(d)) continue;
+            MassRow& row = bodies_.mass[i];
+            row.inverseMass = m.invMass[d];
+            if (rotation_)
+                row = {{m.iwXX[d], m.iwYY[d], m.iwZZ[d], m.iwXY[d], m.iwXZ[d], m.iwYZ[d]}, m.invMass[d], 0.0f};
         }
     });
 
@@ -364,8 +372,7 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
             // Side data: position, velocities, inverse mass and world inverse inertia.
             struct Side {
                 Vec3 p, v, w;
-                float invMass = 0, friction = 0, restitution = 0;
-                simd::SymMat3W<float> inertia{0, 0, 0, 0, 0, 0};
+                float friction = 0, restitution = 0;
                 std::int32_t row = 0;
                 bool dynamic = false;
             };
@@ -385,12 +392,6 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
                 sd.restitution = m.restitution[dense];
                 sd.row = solverIndex_[dense];
                 sd.dynamic = isDynamic(dense);
-                if (sd.dynamic) {
-                    sd.invMass = m.invMass[dense];
-                    if (rotation_)
-                        sd.inertia = simd::SymMat3W<float>::load(m.iwXX.data(), m.iwYY.data(), m.iwZZ.data(),
-                                                                 m.iwXY.data(), m.iwXZ.data(), m.iwYZ.data(), dense);
-                }
                 return sd;
             };
             const Side A = side(pair.a, pair.aStatic), B = side(pair.b, pair.bStatic);
@@ -398,10 +399,6 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
             b.bodyB[lane] = B.row;
             const Vec3 n = mf.normal;
             b.nx[lane] = n.x, b.ny[lane] = n.y, b.nz[lane] = n.z;
-            b.invMassA[lane] = A.invMass;
-            b.invMassB[lane] = B.invMass;
-            A.inertia.store(b.iaXX, b.iaYY, b.iaZZ, b.iaXY, b.iaXZ, b.iaYZ, lane);
-            B.inertia.store(b.ibXX, b.ibYY, b.ibZZ, b.ibXY, b.ibXZ, b.ibYZ, lane);
             // Geometric mean for friction (a frictionless surface is frictionless against anything), the
             // larger restitution (a ball bounces off a floor that does not).
             b.friction[lane] = friction_ ? std::sqrt(A.friction * B.friction) : 0.0f;
@@ -433,7 +430,7 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
                 }
             }
         }
-        finishBatch(b, lanes, friction_);
+        finishBatch(b, lanes, bodies_.mass.data(), friction_);
     }
 }
 
@@ -475,7 +472,7 @@ void ContactSolver::storeVelocities(MovingBodies& m, TaskPool& pool) const {
 
 BodyRows ContactSolver::rowsFor(int worker) {
     SolverBodies& b = bodies_;
-    return BodyRows{b.velocity.data(), b.motion.data(), b.pseudo.data(),
+    return BodyRows{b.velocity.data(), b.motion.data(), b.pseudo.data(), b.mass.data(),
                     static_cast<std::int32_t>(b.count + 1 + static_cast<std::uint32_t>(worker))};
 }
 
@@ -575,8 +572,8 @@ void ContactSolver::orderForShock() {
             for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
                 if (manifoldOfLane_[bi * kBatchLanes + lane] != ~0u) visit(batches_[bi], lane, bi * kBatchLanes + lane);
     };
-    const auto dynamicSide = [](const ContactBatch& b, std::size_t lane, int side) {
-        return (side == 0 ? b.invMassA[lane] : b.invMassB[lane]) > 0;
+    const auto dynamicSide = [&](const ContactBatch& b, std::size_t lane, int side) {
+        return bodies_.mass[static_cast<std::uint32_t>(side == 0 ? b.bodyA[lane] : b.bodyB[lane])].inverseMass > 0;
     };
     forEachLane([&](const ContactBatch& b, std::size_t lane, std::size_t) {
         const bool dynA = dynamicSide(b, lane, 0), dynB = dynamicSide(b, lane, 1);
@@ -634,9 +631,10 @@ void ContactSolver::computeHeldMasses(ShockContact& s) const {
     const ContactBatch& b = batches_[s.lane / kBatchLanes];
     const std::size_t lane = s.lane % kBatchLanes;
     const bool holdA = s.heldSide == 0;
-    const float upperMass = holdA ? b.invMassB[lane] : b.invMassA[lane];
-    const simd::SymMat3W<float> upperInertia =
-        holdA ? contact_kernels::inertiaB<float>(b, lane) : contact_kernels::inertiaA<float>(b, lane);
+    const contact_kernels::MassW<float> upper =
+        contact_kernels::loadMasses<float>(bodies_.mass.data(), holdA ? b.bodyB + lane : b.bodyA + lane);
+    const float upperMass = upper.inverseMass;
+    const simd::SymMat3W<float>& upperInertia = upper.inverseInertia;
     const Vec3 n{b.nx[lane], b.ny[lane], b.nz[lane]}, t1{b.t1x[lane], b.t1y[lane], b.t1z[lane]},
         t2{b.t2x[lane], b.t2y[lane], b.t2z[lane]};
     for (int i = 0; i < b.pointCount; ++i) {
@@ -676,12 +674,10 @@ void ContactSolver::solveHeld(const ShockContact& s, const BodyRows& rows, const
     const std::size_t lane = s.lane % kBatchLanes;
     // Hold the lower side still for this contact (no mass, no inertia; its velocity is still read), and give
     // the points the effective masses of the upper body alone.
-    const bool holdA = s.heldSide == 0;
-    float* held[7] = {holdA ? b.invMassA : b.invMassB, holdA ? b.iaXX : b.ibXX, holdA ? b.iaYY : b.ibYY,
-                      holdA ? b.iaZZ : b.ibZZ,         holdA ? b.iaXY : b.ibXY, holdA ? b.iaXZ : b.ibXZ,
-                      holdA ? b.iaYZ : b.ibYZ};
-    float heldValues[7];
-    for (int i = 0; i < 7; ++i) heldValues[i] = held[i][lane], held[i][lane] = 0;
+    // The pass is serial, so the lower body's mass row can stand still for this one lane and be put back after.
+    MassRow& held = bodies_.mass[static_cast<std::uint32_t>(s.heldSide == 0 ? b.bodyA[lane] : b.bodyB[lane])];
+    const MassRow heldMasses = held;
+    held = MassRow{};
     float pointMasses[kMaxManifoldPoints][3];
     for (int i = 0; i < b.pointCount; ++i) {
         ContactBatch::Point& p = b.points[i];
@@ -694,7 +690,7 @@ void ContactSolver::solveHeld(const ShockContact& s, const BodyRows& rows, const
         contact_kernels::solve<float, true>(b, lane, rows, params);
     else
         contact_kernels::solve<float, false>(b, lane, rows, params);
-    for (int i = 0; i < 7; ++i) held[i][lane] = heldValues[i];
+    held = heldMasses;
     for (int i = 0; i < b.pointCount; ++i) {
         ContactBatch::Point& p = b.points[i];
         p.normalMass[lane] = pointMasses[i][0], p.tangentMass1[lane] = pointMasses[i][1];

@@ -42,7 +42,10 @@ struct SolverBodies {
     AlignedVector<BodyRow> velocity;  ///< linear and angular velocity
     /// Displacement of the centre of mass since prepare() (linear), and the rotation since as a small-angle vector.
     AlignedVector<BodyRow> motion;
-    AlignedVector<BodyRow> pseudo;      ///< split impulses' pseudo-velocities
+    AlignedVector<BodyRow> pseudo;  ///< split impulses' pseudo-velocities
+    /// Inverse masses and world inverse inertias: zero for the bodies that cannot move, the still row and the
+    /// scratch rows (and the inertias without Effect::Rotation). Fixed from prepare() on.
+    AlignedVector<MassRow> mass;
     std::vector<std::uint32_t> moving;  ///< solver index -> dense index of the moving body
     std::uint32_t count = 0;
 };

@@ -134,14 +134,16 @@ TEST(ContactSolver, ColoursNeverHoldADynamicBodyTwice) {
             for (std::uint32_t bi = ranges[c].firstBatch; bi < ranges[c].firstBatch + ranges[c].batchCount; ++bi) {
                 const ContactBatch& b = solver.batches()[bi];
                 for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
-                    if (b.invMassA[lane] == 0 && b.invMassB[lane] == 0) continue;
+                    const float invMassA = solver.bodies().mass[static_cast<std::size_t>(b.bodyA[lane])].inverseMass;
+                    const float invMassB = solver.bodies().mass[static_cast<std::size_t>(b.bodyB[lane])].inverseMass;
+                    if (invMassA == 0 && invMassB == 0) continue;
                     ++lanes;
                     for (int i = 0; i < b.pointCount; ++i) points += b.points[i].normalMass[lane] > 0 ? 1 : 0;
                     if (overflow) continue;  // solved one lane at a time, so sharing is allowed
-                    if (b.invMassA[lane] > 0) {
+                    if (invMassA > 0) {
                         EXPECT_TRUE(seen.insert(b.bodyA[lane]).second) << "colour " << c;
                     }
-                    if (b.invMassB[lane] > 0) {
+                    if (invMassB > 0) {
                         EXPECT_TRUE(seen.insert(b.bodyB[lane]).second) << "colour " << c;
                     }
                 }
@@ -222,14 +224,17 @@ TEST(ContactSolver, IslandBlocksEndWhereOneColouringEnds) {
 
     // No dynamic body appears in two blocks, or in a block and the large islands.
     std::vector<int> ownerOfRow(blocked.bodies().count, -1);
+    const auto massOf = [&](std::int32_t row) {
+        return blocked.bodies().mass[static_cast<std::size_t>(row)].inverseMass;
+    };
     const auto claim = [&](detail::ContactSolver::ColorSpan span, int owner) {
         for (std::uint32_t c = span.firstColor; c < span.firstColor + span.colorCount; ++c) {
             const auto range = blocked.colorRanges()[c];
             for (std::uint32_t bi = range.firstBatch; bi < range.firstBatch + range.batchCount; ++bi) {
                 const ContactBatch& b = blocked.batches()[bi];
                 for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
-                    for (const auto& [row, invMass] :
-                         {std::pair{b.bodyA[lane], b.invMassA[lane]}, std::pair{b.bodyB[lane], b.invMassB[lane]}}) {
+                    for (const auto& [row, invMass] : {std::pair{b.bodyA[lane], massOf(b.bodyA[lane])},
+                                                       std::pair{b.bodyB[lane], massOf(b.bodyB[lane])}}) {
                         if (invMass == 0) continue;
                         int& owner_ = ownerOfRow[static_cast<std::size_t>(row)];
                         EXPECT_TRUE(owner_ == -1 || owner_ == owner) << "row " << row << " in two blocks";
@@ -340,9 +345,11 @@ TEST(ContactSolver, JointsInBlocksEndWhereTheSerialJointPassEnds) {
     EXPECT_EQ(compareVelocities(blocked, together, w.bodies.moving.size()), 320u);
 }
 
-/// Random velocity, motion and pseudo-velocity rows with the still row at n - 2 and the scratch row at n - 1.
+/// Random velocity, motion and pseudo-velocity rows and masses, with the still row at n - 2 and the scratch row at
+/// n - 1.
 struct Rows {
     std::vector<BodyRow> data[3];
+    std::vector<detail::MassRow> mass;
     explicit Rows(std::size_t n, std::mt19937& rng) {
         std::uniform_real_distribution<float> u(-1.0f, 1.0f);
         for (auto& d : data) {
@@ -350,9 +357,12 @@ struct Rows {
             for (BodyRow& r : d) r = {{u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}};
             d[n - 2] = BodyRow{};
         }
+        test::fillRandomMassRows(mass, n - 1, static_cast<std::int32_t>(n - 2), rng);
+        mass.push_back(detail::MassRow{});  // the scratch row is never read for masses
     }
     BodyRows rows() {
-        return {data[0].data(), data[1].data(), data[2].data(), static_cast<std::int32_t>(data[0].size() - 1)};
+        return {data[0].data(), data[1].data(), data[2].data(), mass.data(),
+                static_cast<std::int32_t>(data[0].size() - 1)};
     }
 };
 

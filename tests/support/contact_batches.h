@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <vector>
 
 #include "solver/contact_batch.h"
 
@@ -30,11 +31,6 @@ inline void fillRandomBatch(detail::ContactBatch& b, std::mt19937& rng, std::int
         b.nx[lane] = n.x, b.ny[lane] = n.y, b.nz[lane] = n.z;
         b.t1x[lane] = t1.x, b.t1y[lane] = t1.y, b.t1z[lane] = t1.z;
         b.t2x[lane] = t2.x, b.t2y[lane] = t2.y, b.t2z[lane] = t2.z;
-        b.invMassA[lane] = pos(rng);
-        b.invMassB[lane] = lane + 1 == kBatchLanes ? 0.0f : pos(rng);
-        b.iaXX[lane] = pos(rng), b.iaYY[lane] = pos(rng), b.iaZZ[lane] = pos(rng);
-        b.ibXX[lane] = pos(rng), b.ibYY[lane] = pos(rng), b.ibZZ[lane] = pos(rng);
-        b.iaXY[lane] = 0.1f * u(rng), b.ibXZ[lane] = 0.1f * u(rng);
         b.friction[lane] = 0.6f;
         b.restitution[lane] = 0.5f;
         b.biasRate[lane] = 12.0f, b.massScale[lane] = 0.9f, b.impulseScale[lane] = 0.1f, b.slop[lane] = 0.005f;
@@ -47,6 +43,21 @@ inline void fillRandomBatch(detail::ContactBatch& b, std::mt19937& rng, std::int
             p.normalImpulse[lane] = pos(rng), p.tangentImpulse1[lane] = 0.3f * u(rng);
             p.relativeVelocity[lane] = -3.0f * pos(rng), p.maxNormalImpulse[lane] = pos(rng);
         }
+    }
+}
+
+/// Random masses for body rows [0, count): positive inverse masses and inertias with small products of inertia; row
+/// `still` (the still row) keeps zero masses.
+inline void fillRandomMassRows(std::vector<detail::MassRow>& rows, std::size_t count, std::int32_t still,
+                               std::mt19937& rng) {
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f), pos(0.1f, 1.0f);
+    rows.assign(count, detail::MassRow{});
+    for (std::size_t i = 0; i < count; ++i) {
+        if (static_cast<std::int32_t>(i) == still) continue;
+        detail::MassRow& r = rows[i];
+        r.inverseMass = pos(rng);
+        r.inverseInertia[0] = pos(rng), r.inverseInertia[1] = pos(rng), r.inverseInertia[2] = pos(rng);
+        r.inverseInertia[3] = 0.1f * u(rng), r.inverseInertia[4] = 0.1f * u(rng);
     }
 }
 
