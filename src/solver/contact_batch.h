@@ -28,7 +28,7 @@ struct alignas(64) ContactBatch {
     Lanes nx, ny, nz;         ///< normal, from A to B
     Lanes t1x, t1y, t1z;      ///< friction directions: t1, t2, n right-handed
     Lanes t2x, t2y, t2z;
-    Lanes friction, restitution;
+    Lanes friction;
     Lanes biasRate;      ///< overlap fed back as approach speed, 1/s
     Lanes massScale;     ///< soft constraint: share of the rigid response...
     Lanes impulseScale;  ///< ...and of the accumulated impulse taken away each iteration
@@ -39,9 +39,18 @@ struct alignas(64) ContactBatch {
         Lanes separation;  ///< at prepare(), less the anchors' normal offset: current = this + n . (xB - xA)
         Lanes normalMass, tangentMass1, tangentMass2;
         Lanes normalImpulse, tangentImpulse1, tangentImpulse2;
-        Lanes pseudoImpulse;     ///< split impulses
+    } points[kMaxManifoldPoints];
+};
+
+/// What only bounces and split impulses read, beside its batch (same index), so that the other solves do not stream
+/// it: the solver keeps these only when the step has restitution or split impulses.
+struct alignas(64) ContactBatchExtras {
+    using Lanes = float[kBatchLanes];
+    Lanes restitution;
+    struct Point {
         Lanes relativeVelocity;  ///< normal approach speed at prepare(), for restitution
         Lanes maxNormalImpulse;  ///< largest normal impulse of the step: zero means the point never pushed
+        Lanes pseudoImpulse;     ///< split impulses
     } points[kMaxManifoldPoints];
 };
 
@@ -229,8 +238,10 @@ F separation(const ContactBatch::Point& p, std::size_t lane, const Vec3W<F>& n, 
 
 /// One velocity iteration: friction at every point (within the cone of last iteration's normal impulse), then the
 /// normal impulses, Gauss-Seidel within the manifold.
+/// With `extras`, each point's largest normal impulse is kept for restitution.
 template <class F, bool Friction>
-void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveParams& params) {
+void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveParams& params,
+           ContactBatchExtras* extras = nullptr) {
     Pair<F> pair(b, lane, rows.velocity, rows.mass, rows.scratchRow);
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
     if constexpr (Friction) {
@@ -266,7 +277,8 @@ void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveP
     const F massScale = params.useBias ? at<F>(b.massScale, lane) : F(1.0f);
     const F impulseScale = params.useBias ? at<F>(b.impulseScale, lane) : F(0.0f);
     const F maxPush(-params.maxPushOutVelocity);
-    for (ContactBatch::Point& p : pointsOf(b)) {
+    for (int i = 0; i < b.pointCount; ++i) {
+        ContactBatch::Point& p = b.points[i];
         const Vec3W<F> rA = anchorA<F>(p, lane), rB = anchorB<F>(p, lane);
         const F s = separation(p, lane, n, rA, rB, dpA, daA, dpB, daB);
         const auto apart = s > F(0.0f);
@@ -282,7 +294,10 @@ void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveP
         const F delta = F(0.0f) - at<F>(p.normalMass, lane) * scaleM * (vn + bias) - scaleI * old;
         const F updated = simd::max(old + delta, F(0.0f));
         put(p.normalImpulse, lane, updated);
-        put(p.maxNormalImpulse, lane, simd::max(at<F>(p.maxNormalImpulse, lane), updated - old));
+        if (extras) {
+            float* pushed = extras->points[i].maxNormalImpulse;
+            put(pushed, lane, simd::max(at<F>(pushed, lane), updated - old));
+        }
         pair.apply(rA, rB, n * (updated - old));
     }
     pair.store(rows.velocity);
@@ -291,7 +306,8 @@ void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveP
 /// Split impulses: the overlap beyond the slop is removed through pseudo-velocities, which move the bodies this
 /// substep and are then forgotten, so that push-out never becomes kinetic energy.
 template <class F>
-void solvePositions(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveParams& params) {
+void solvePositions(ContactBatch& b, ContactBatchExtras& extras, std::size_t lane, const BodyRows& rows,
+                    const SolveParams& params) {
     Pair<F> pair(b, lane, rows.pseudo, rows.mass, rows.scratchRow);
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
     const RowW<F> motionA = loadRows<F>(rows.motion, b.bodyA + lane);
@@ -299,14 +315,16 @@ void solvePositions(ContactBatch& b, std::size_t lane, const BodyRows& rows, con
     const Vec3W<F>&dpA = motionA.linear, &daA = motionA.angular, &dpB = motionB.linear, &daB = motionB.angular;
     const F biasRate = at<F>(b.biasRate, lane), slop = at<F>(b.slop, lane);
     const F maxPush(params.maxPushOutVelocity);
-    for (ContactBatch::Point& p : pointsOf(b)) {
+    for (int i = 0; i < b.pointCount; ++i) {
+        const ContactBatch::Point& p = b.points[i];
+        float* pseudoImpulse = extras.points[i].pseudoImpulse;
         const Vec3W<F> rA = anchorA<F>(p, lane), rB = anchorB<F>(p, lane);
         const F s = separation(p, lane, n, rA, rB, dpA, daA, dpB, daB);
         const F target = simd::min(F(0.0f) - biasRate * simd::min(s + slop, F(0.0f)), maxPush);
-        const F old = at<F>(p.pseudoImpulse, lane);
+        const F old = at<F>(pseudoImpulse, lane);
         const F vn = dot(pair.relativeVelocity(rA, rB), n);
         const F updated = simd::max(old + at<F>(p.normalMass, lane) * (target - vn), F(0.0f));
-        put(p.pseudoImpulse, lane, updated);
+        put(pseudoImpulse, lane, updated);
         pair.apply(rA, rB, n * (updated - old));
     }
     pair.store(rows.pseudo);
@@ -314,13 +332,16 @@ void solvePositions(ContactBatch& b, std::size_t lane, const BodyRows& rows, con
 
 /// Reverses approach speeds above the threshold by the restitution coefficient, at points that pushed this step.
 template <class F>
-void restitution(ContactBatch& b, std::size_t lane, const BodyRows& rows, float threshold) {
+void restitution(ContactBatch& b, const ContactBatchExtras& extras, std::size_t lane, const BodyRows& rows,
+                 float threshold) {
     Pair<F> pair(b, lane, rows.velocity, rows.mass, rows.scratchRow);
     const Vec3W<F> n = at3<F>(b.nx, b.ny, b.nz, lane);
-    const F e = at<F>(b.restitution, lane);
-    for (ContactBatch::Point& p : pointsOf(b)) {
-        const F approach = at<F>(p.relativeVelocity, lane);
-        const auto bounces = simd::andMask(approach<F(-threshold), at<F>(p.maxNormalImpulse, lane)> F(0.0f));
+    const F e = at<F>(extras.restitution, lane);
+    for (int i = 0; i < b.pointCount; ++i) {
+        ContactBatch::Point& p = b.points[i];
+        const F approach = at<F>(extras.points[i].relativeVelocity, lane);
+        const auto bounces =
+            simd::andMask(approach<F(-threshold), at<F>(extras.points[i].maxNormalImpulse, lane)> F(0.0f));
         if (simd::none(bounces)) continue;
         const Vec3W<F> rA = anchorA<F>(p, lane), rB = anchorB<F>(p, lane);
         const F vn = dot(pair.relativeVelocity(rA, rB), n);

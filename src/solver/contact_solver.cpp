@@ -79,7 +79,8 @@ struct BatchInputs {
 
 /// The lane-parallel part of building a batch, in SIMD over its manifolds: friction directions, effective masses
 /// and approach speeds.
-void finishBatch(ContactBatch& b, const BatchInputs& in, const MassRow* mass, bool friction) {
+void finishBatch(ContactBatch& b, ContactBatchExtras* extras, const BatchInputs& in, const MassRow* mass,
+                 bool friction) {
     using F = simd::FloatW;
     using contact_kernels::at;
     using contact_kernels::at3;
@@ -125,8 +126,13 @@ void finishBatch(ContactBatch& b, const BatchInputs& in, const MassRow* mass, bo
             put(pt.tangentMass1, 0, effective(t1));
             put(pt.tangentMass2, 0, effective(t2));
         }
-        const simd::Vec3W<F> dv = (vB + simd::cross(wB, rB)) - (vA + simd::cross(wA, rA));
-        put(pt.relativeVelocity, 0, simd::select(present, simd::dot(dv, n), zero));
+        if (extras) {
+            const simd::Vec3W<F> dv = (vB + simd::cross(wB, rB)) - (vA + simd::cross(wA, rA));
+            ContactBatchExtras::Point& extra = extras->points[i];
+            put(extra.relativeVelocity, 0, simd::select(present, simd::dot(dv, n), zero));
+            put(extra.maxNormalImpulse, 0, zero);
+            put(extra.pseudoImpulse, 0, zero);
+        }
     }
 }
 
@@ -293,6 +299,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     // they are still in the core's cache (see forEachColor); the large islands' rows are built here, in parallel.
     // Nothing the rows read changes between here and the first solve. Shock propagation reads every row here.
     batches_.resize(batchCount);
+    extras_.resize(bounce || settings_.positionCorrection == PositionCorrection::SplitImpulse ? batchCount : 0);
     const float invH = 1.0f / h;
     const float hertz = std::min(settings_.contactHertz, 0.25f * invH);
     const bool softStep = settings_.positionCorrection == PositionCorrection::SoftStep;
@@ -356,6 +363,8 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
     for (std::size_t lane = 0; lane < kPrefetchLanes; ++lane) prefetchLane(begin * kBatchLanes + lane);
     for (std::size_t bi = begin; bi < end; ++bi) {
         ContactBatch& b = batches_[bi];
+        ContactBatchExtras* extras = extrasOf(b);
+        if (extras) std::memset(static_cast<void*>(extras->restitution), 0, sizeof extras->restitution);
         b.pointCount = batchPoints_[bi];
         std::memset(static_cast<void*>(&b), 0, offsetof(ContactBatch, pointCount));
         std::memset(static_cast<void*>(&b.nx), 0,
@@ -402,7 +411,7 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
             // Geometric mean for friction (a frictionless surface is frictionless against anything), the
             // larger restitution (a ball bounces off a floor that does not).
             b.friction[lane] = friction_ ? std::sqrt(A.friction * B.friction) : 0.0f;
-            b.restitution[lane] = bounce ? std::max(A.restitution, B.restitution) : 0.0f;
+            if (extras) extras->restitution[lane] = bounce ? std::max(A.restitution, B.restitution) : 0.0f;
             const Softness sn = !softStep ? stiff : (A.dynamic && B.dynamic ? dynamicSoft : staticSoft);
             b.biasRate[lane] = sn.biasRate;
             b.massScale[lane] = sn.massScale;
@@ -430,7 +439,7 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
                 }
             }
         }
-        finishBatch(b, lanes, bodies_.mass.data(), friction_);
+        finishBatch(b, extras, lanes, bodies_.mass.data(), friction_);
     }
 }
 
@@ -687,9 +696,9 @@ void ContactSolver::solveHeld(const ShockContact& s, const BodyRows& rows, const
         p.tangentMass2[lane] = s.heldMasses[i][2];
     }
     if (friction_)
-        contact_kernels::solve<float, true>(b, lane, rows, params);
+        contact_kernels::solve<float, true>(b, lane, rows, params, extrasOf(b));
     else
-        contact_kernels::solve<float, false>(b, lane, rows, params);
+        contact_kernels::solve<float, false>(b, lane, rows, params, extrasOf(b));
     held = heldMasses;
     for (int i = 0; i < b.pointCount; ++i) {
         ContactBatch::Point& p = b.points[i];
@@ -721,7 +730,7 @@ void ContactSolver::solveVelocities(bool useBias, TaskPool& pool, int iterations
                 if (pass < first)
                     contact_kernels::warmStart<F>(b, lane, rows);
                 else
-                    contact_kernels::solve<F, kFriction>(b, lane, rows, params);
+                    contact_kernels::solve<F, kFriction>(b, lane, rows, params, extrasOf(b));
             },
             first + iterations, joints);
     };
@@ -738,7 +747,7 @@ void ContactSolver::solvePositions(TaskPool& pool, int iterations) {
     forEachColor(
         pool,
         [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows, int) {
-            contact_kernels::solvePositions<F>(b, lane, rows, params);
+            contact_kernels::solvePositions<F>(b, *extrasOf(b), lane, rows, params);
         },
         iterations);
 }
@@ -767,15 +776,16 @@ void ContactSolver::applyPseudoVelocities(MovingBodies& m, TaskPool& pool) {
     });
     std::fill(b.pseudo.begin() + b.count, b.pseudo.end(), BodyRow{});
     // The pseudo impulses start again from zero in the next substep.
-    for (ContactBatch& batch : batches_)
-        for (ContactBatch::Point& p : contact_kernels::pointsOf(batch))
-            std::fill(std::begin(p.pseudoImpulse), std::end(p.pseudoImpulse), 0.0f);
+    for (std::size_t bi = 0; bi < extras_.size(); ++bi)
+        for (int i = 0; i < batches_[bi].pointCount; ++i)
+            std::fill(std::begin(extras_[bi].points[i].pseudoImpulse), std::end(extras_[bi].points[i].pseudoImpulse),
+                      0.0f);
 }
 
 void ContactSolver::applyRestitution(TaskPool& pool) {
     const float threshold = settings_.restitutionThreshold;
     forEachColor(pool, [&]<class F>(ContactBatch& b, std::size_t lane, const BodyRows& rows, int) {
-        contact_kernels::restitution<F>(b, lane, rows, threshold);
+        contact_kernels::restitution<F>(b, *extrasOf(b), lane, rows, threshold);
     });
 }
 

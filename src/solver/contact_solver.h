@@ -205,6 +205,11 @@ private:
     ContactSolverStats stats_;
     SolverBodies bodies_;
     std::vector<ContactBatch> batches_;
+    /// Beside batches_ when the step has restitution or split impulses, empty otherwise.
+    std::vector<ContactBatchExtras> extras_;
+    ContactBatchExtras* extrasOf(const ContactBatch& b) {
+        return extras_.empty() ? nullptr : &extras_[static_cast<std::size_t>(&b - batches_.data())];
+    }
     std::vector<ColorRange> colors_;
     std::vector<ColorSpan> blocks_;
     ColorSpan large_;

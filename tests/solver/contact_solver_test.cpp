@@ -373,6 +373,9 @@ TEST(ContactSolver, WideKernelsAgreeWithScalarKernelsBitForBit) {
         ContactBatch wide;
         test::fillRandomBatch(wide, rng, bodies);
         ContactBatch scalar = wide;
+        detail::ContactBatchExtras wideExtras;
+        test::fillRandomExtras(wideExtras, rng);
+        detail::ContactBatchExtras scalarExtras = wideExtras;
         std::mt19937 rowRng(trial);
         Rows wideRows(bodies + 2, rowRng);
         Rows scalarRows = wideRows;
@@ -381,22 +384,23 @@ TEST(ContactSolver, WideKernelsAgreeWithScalarKernelsBitForBit) {
         params.useBias = trial % 2 == 0;
         BodyRows w = wideRows.rows(), s = scalarRows.rows();
         detail::contact_kernels::warmStart<simd::FloatW>(wide, 0, w);
-        detail::contact_kernels::solve<simd::FloatW, true>(wide, 0, w, params);
-        detail::contact_kernels::solvePositions<simd::FloatW>(wide, 0, w, params);
-        detail::contact_kernels::restitution<simd::FloatW>(wide, 0, w, 1.0f);
+        detail::contact_kernels::solve<simd::FloatW, true>(wide, 0, w, params, &wideExtras);
+        detail::contact_kernels::solvePositions<simd::FloatW>(wide, wideExtras, 0, w, params);
+        detail::contact_kernels::restitution<simd::FloatW>(wide, wideExtras, 0, w, 1.0f);
         for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
             detail::contact_kernels::warmStart<float>(scalar, lane, s);
         for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
-            detail::contact_kernels::solve<float, true>(scalar, lane, s, params);
+            detail::contact_kernels::solve<float, true>(scalar, lane, s, params, &scalarExtras);
         for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
-            detail::contact_kernels::solvePositions<float>(scalar, lane, s, params);
+            detail::contact_kernels::solvePositions<float>(scalar, scalarExtras, lane, s, params);
         for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
-            detail::contact_kernels::restitution<float>(scalar, lane, s, 1.0f);
+            detail::contact_kernels::restitution<float>(scalar, scalarExtras, lane, s, 1.0f);
         // Every row but the scratch row (which absorbs writes for the still body in any order) must match.
         for (int a = 0; a < 3; ++a)
             for (std::int32_t r = 0; r <= bodies; ++r)
                 ASSERT_TRUE(sameRow(wideRows.data[a][r], scalarRows.data[a][r])) << "array " << a << " row " << r;
         ASSERT_EQ(std::memcmp(&wide, &scalar, sizeof wide), 0) << "trial " << trial;
+        ASSERT_EQ(std::memcmp(&wideExtras, &scalarExtras, sizeof wideExtras), 0) << "trial " << trial;
     }
 }
 

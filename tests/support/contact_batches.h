@@ -32,7 +32,6 @@ inline void fillRandomBatch(detail::ContactBatch& b, std::mt19937& rng, std::int
         b.t1x[lane] = t1.x, b.t1y[lane] = t1.y, b.t1z[lane] = t1.z;
         b.t2x[lane] = t2.x, b.t2y[lane] = t2.y, b.t2z[lane] = t2.z;
         b.friction[lane] = 0.6f;
-        b.restitution[lane] = 0.5f;
         b.biasRate[lane] = 12.0f, b.massScale[lane] = 0.9f, b.impulseScale[lane] = 0.1f, b.slop[lane] = 0.005f;
         for (int i = 0; i < 3; ++i) {
             ContactBatch::Point& p = b.points[i];
@@ -41,7 +40,19 @@ inline void fillRandomBatch(detail::ContactBatch& b, std::mt19937& rng, std::int
             p.separation[lane] = 0.02f * u(rng);
             p.normalMass[lane] = pos(rng), p.tangentMass1[lane] = pos(rng), p.tangentMass2[lane] = pos(rng);
             p.normalImpulse[lane] = pos(rng), p.tangentImpulse1[lane] = 0.3f * u(rng);
-            p.relativeVelocity[lane] = -3.0f * pos(rng), p.maxNormalImpulse[lane] = pos(rng);
+        }
+    }
+}
+
+/// Random restitution data for a batch of fillRandomBatch: every point approached fast and pushed.
+inline void fillRandomExtras(detail::ContactBatchExtras& e, std::mt19937& rng) {
+    std::uniform_real_distribution<float> pos(0.1f, 1.0f);
+    std::memset(static_cast<void*>(&e), 0, sizeof e);
+    for (std::size_t lane = 0; lane < kBatchLanes; ++lane) {
+        e.restitution[lane] = 0.5f;
+        for (int i = 0; i < 3; ++i) {
+            e.points[i].relativeVelocity[lane] = -3.0f * pos(rng);
+            e.points[i].maxNormalImpulse[lane] = pos(rng);
         }
     }
 }
