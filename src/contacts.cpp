@@ -1,5 +1,6 @@
 #include "contacts.h"
 
+#include <algorithm>
 #include <atomic>
 
 #include "parallel.h"
@@ -8,6 +9,10 @@ namespace rubble::detail {
 namespace {
 
 constexpr std::size_t kChunk = 1024;
+/// How many of last step's entries the in-order guess looks at: pairs that separated leave gaps this wide.
+constexpr std::size_t kLookahead = 8;
+/// Misses times unmatched entries up to which they are compared directly instead of through the hash table.
+constexpr std::size_t kDirectSearchPairs = std::size_t{1} << 16;
 
 std::uint64_t hashOf(const ContactKey& k) {
     // Three words folded with odd multipliers and a final avalanche: keys differ in few bits (neighbouring slots).
@@ -33,9 +38,10 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
     const std::size_t chunks = TaskPool::chunkCount(n, kChunk);
     chunkMatches_.assign(chunks, {});
     chunkMisses_.resize(chunks);
+    previousMatched_.assign(previous_.size(), 0);
     const auto& slots = storage.slots();
     // Manifolds come in canonical order, which changes little from step to step: each chunk tries last step's
-    // entry at its own first index, then always the entry after the last match, so a settled scene reads last
+    // entries from its own first index, then from the entry after the last match, so a settled scene reads last
     // step's entries in order. Only the manifolds that guess misses look in the hash table, which is built for
     // them alone: a settled scene builds none.
     pool.forChunks(n, kChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
@@ -43,7 +49,8 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
                   PointImpulse{});
         std::vector<std::uint32_t>& misses = chunkMisses_[chunk];
         misses.clear();
-        std::size_t next = begin;
+        // The window starts a little before the chunk's own index: manifolds new since last step shift it back.
+        std::size_t next = begin > kLookahead ? begin - kLookahead : 0, window = 2 * kLookahead;
         for (std::size_t m = begin; m < end; ++m) {
             const ContactPair& p = contacts.pairs[m];
             const std::uint32_t slotA = slotOf(storage, p.a, p.aStatic), slotB = slotOf(storage, p.b, p.bStatic);
@@ -53,9 +60,17 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
             key.parts = (std::uint64_t{p.triangle} << 32) | (std::uint64_t{p.childA} << 16) | p.childB;
             currentKeys_[m] = key;
             if (previous_.empty()) continue;
-            if (next < previous_.size() && previous_[next].key == key) {
-                carry(contacts.manifolds[m], previous_[next], &impulses[m * kMaxManifoldPoints], chunkMatches_[chunk]);
-                ++next;
+            // A manifold new this step misses and leaves the guess where it was; entries of pairs that separated
+            // are skipped by looking a few entries ahead.
+            std::size_t at = next;
+            const std::size_t last = std::min(previous_.size(), next + window);
+            while (at < last && !(previous_[at].key == key)) ++at;
+            if (at < last) {
+                carry(contacts.manifolds[m], previous_[at], &impulses[m * kMaxManifoldPoints], chunkMatches_[chunk]);
+                // Relaxed: each entry is taken by one manifold at most (keys are unique), the flag only says so.
+                std::atomic_ref<std::uint8_t>(previousMatched_[at]).store(1, std::memory_order_relaxed);
+                next = at + 1;
+                window = kLookahead;
             } else {
                 misses.push_back(static_cast<std::uint32_t>(m));
             }
@@ -63,6 +78,24 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
     });
     std::size_t missCount = 0;
     for (const std::vector<std::uint32_t>& misses : chunkMisses_) missCount += misses.size();
+    if (missCount > 0) {
+        // Only last step's entries the in-order pass did not take can match now. When those and the misses are few
+        // (a settled scene: pairs that came and went), comparing them all costs less than a table.
+        unmatched_.clear();
+        for (std::size_t e = 0; e < previous_.size(); ++e)
+            if (!previousMatched_[e]) unmatched_.push_back(static_cast<std::uint32_t>(e));
+        if (missCount * unmatched_.size() <= kDirectSearchPairs) {
+            for (std::size_t chunk = 0; chunk < chunks; ++chunk)
+                for (const std::uint32_t m : chunkMisses_[chunk])
+                    for (const std::uint32_t e : unmatched_)
+                        if (previous_[e].key == currentKeys_[m]) {
+                            carry(contacts.manifolds[m], previous_[e], &impulses[std::size_t{m} * kMaxManifoldPoints],
+                                  chunkMatches_[chunk]);
+                            break;
+                        }
+            missCount = 0;
+        }
+    }
     if (missCount > 0) {
         if (!tableValid_) rebuildTable(pool);
         const std::size_t mask = table_.size() - 1;

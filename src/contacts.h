@@ -93,6 +93,8 @@ private:
     bool tableValid_ = false;           ///< table_ indexes previous_ as it is now
     std::vector<Matches> chunkMatches_;
     std::vector<std::vector<std::uint32_t>> chunkMisses_;  ///< per chunk: manifolds the in-order guess missed
+    std::vector<std::uint8_t> previousMatched_;            ///< per entry of previous_: taken by the in-order guess
+    std::vector<std::uint32_t> unmatched_;                 ///< entries of previous_ the in-order guess left
     std::uint32_t matchedManifolds_ = 0, matchedPoints_ = 0;
 };
 

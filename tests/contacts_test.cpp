@@ -209,3 +209,33 @@ TEST(ContactCache, ReorderedInsertedAndRemovedManifoldsMatchByKeyAsBruteForce) {
     EXPECT_GT(matched, 4000u);
     EXPECT_LT(matched, second.size());  // some pairs are new: the table's misses are exercised too
 }
+
+TEST(ContactCache, AManifoldMovedFarInTheOrderStillCarriesItsImpulses) {
+    // A few changes (one manifold moves from near the front to near the back of 300, one pair is new): too few for
+    // the hash table, so the moved manifold is found among the entries the in-order pass left.
+    BodyStorage storage;
+    std::uint32_t dense;
+    for (int i = 0; i < 302; ++i) storage.allocate(BodySet::Moving, dense);
+    TaskPool pool(2);
+    Contacts before;
+    for (std::uint32_t i = 0; i < 300; ++i) {
+        before.pairs.push_back({i, i + 1, false, false});
+        before.manifolds.push_back(manifoldWith({1, 2}));
+    }
+    ContactCache cache;
+    std::vector<PointImpulse> impulses;
+    cache.warmStart(before, storage, pool, impulses);
+    for (std::size_t k = 0; k < impulses.size(); ++k) impulses[k].normal = float(k);
+    cache.remember(before, impulses, pool);
+
+    Contacts after = before;
+    std::rotate(after.pairs.begin() + 5, after.pairs.begin() + 6, after.pairs.begin() + 290);  // pair 5 moves to 289
+    after.pairs.push_back({300, 301, false, false});
+    after.manifolds.push_back(manifoldWith({1, 2}));
+    cache.warmStart(after, storage, pool, impulses);
+    EXPECT_EQ(cache.matchedManifolds(), 300u);
+    EXPECT_EQ(impulses[289 * kMaxManifoldPoints].normal, float(5 * kMaxManifoldPoints));
+    EXPECT_EQ(impulses[289 * kMaxManifoldPoints + 1].normal, float(5 * kMaxManifoldPoints + 1));
+    EXPECT_EQ(impulses[5 * kMaxManifoldPoints].normal, float(6 * kMaxManifoldPoints));
+    EXPECT_EQ(impulses[300 * kMaxManifoldPoints].normal, 0.0f);
+}
