@@ -10,6 +10,7 @@
 #include "narrowphase/convex_pairs.h"
 #include "narrowphase/hull_pairs.h"
 #include "narrowphase/triangle_pairs.h"
+#include "narrowphase/triangle_reach.h"
 #include "parallel.h"
 #include "shapes/mesh_adjacency.h"
 #include "simd/simd.h"
@@ -53,6 +54,12 @@ struct NarrowPhaseStage::Scratch {
     alignas(64) float out[11][kBlock];
     alignas(64) std::uint32_t feature[2][kBlock];
     alignas(64) std::int32_t count[kBlock];
+    /// A body's run of triangle jobs: world vertices (SoA, x y z of vertex 0, 1, 2), active edges and the reach
+    /// tests' verdicts, padded to whole SIMD batches; grown, never shrunk.
+    std::vector<float> triangles[9];
+    std::vector<std::uint8_t> activeEdges;
+    std::unique_ptr<bool[]> inReach;
+    std::size_t inReachCapacity = 0;
 };
 
 namespace {
@@ -186,30 +193,81 @@ void collide(PairKernel kernel, const Posed& a, const Posed& b, float margin, co
     }
 }
 
-/// Body A against triangle t of the mesh `mesh` (prepared for A).
+/// Whether two jobs' pairs are the same two bodies (and compound children): a body's triangle jobs share them.
+bool sameBodies(const ContactPair& p, const ContactPair& q) {
+    return p.a == q.a && p.b == q.b && p.aStatic == q.aStatic && p.bStatic == q.bStatic && p.childA == q.childA &&
+           p.childB == q.childB;
+}
+
+/// Body A against the triangles of jobs [first, end) of `chunk` (a run of one body against the mesh `mesh`, prepared
+/// for A): the vertices of all of them are fetched first, the reach tests (triangle_reach.h) run over them in SIMD
+/// lanes, and the exact kernel only sees the triangles they leave.
 template <class HullMap>
-void collideTriangle(PairKernel kernel, const Posed& a, const MeshSide& mesh, std::uint32_t t, float margin,
-                     const HullMap& hulls, Manifold& out) {
-    out.pointCount = 0;
-    TriangleVertices tri;
-    std::uint8_t active = 0;
-    mesh.triangle(t, tri, active);
+void collideTriangles(PairKernel kernel, const Posed& a, const MeshSide& mesh, NarrowPhaseStage::Chunk& chunk,
+                      std::size_t first, std::size_t end, float margin, const HullMap& hulls,
+                      NarrowPhaseStage::Scratch& s) {
+    const std::size_t count = end - first, padded = triangleLanesPadded(count);
+    for (std::vector<float>& lane : s.triangles)
+        if (lane.size() < padded) lane.resize(padded);
+    if (s.activeEdges.size() < count) s.activeEdges.resize(count);
+    if (s.inReachCapacity < padded) {
+        s.inReach = std::make_unique<bool[]>(padded);
+        s.inReachCapacity = padded;
+    }
+    for (std::size_t k = 0; k < padded; ++k) {
+        // The padding repeats the last triangle: finite values the wide tests may read.
+        TriangleVertices tri;
+        mesh.triangle(chunk.jobs[first + std::min(k, count - 1)].pair.triangle, tri,
+                      s.activeEdges[std::min(k, count - 1)]);
+        for (int v = 0; v < 3; ++v) {
+            s.triangles[3 * v][k] = tri[v].x;
+            s.triangles[3 * v + 1][k] = tri[v].y;
+            s.triangles[3 * v + 2][k] = tri[v].z;
+        }
+    }
+    const TriangleLanes lanes{{s.triangles[0].data(), s.triangles[3].data(), s.triangles[6].data()},
+                              {s.triangles[1].data(), s.triangles[4].data(), s.triangles[7].data()},
+                              {s.triangles[2].data(), s.triangles[5].data(), s.triangles[8].data()}};
+    bool* inReach = s.inReach.get();
     switch (kernel) {
         case PairKernel::SphereTriangle:
-            collideSphereTriangle(a.pose.position, a.shape->radius, tri, active, margin, out);
+            sphereTrianglesInReach(a.pose.position, a.shape->radius, margin, lanes, count, inReach);
             break;
         case PairKernel::CapsuleTriangle:
-            collideCapsuleTriangle(mesh.capsule, tri, active, margin, out);
+            capsuleTrianglesInReach(mesh.capsule, margin, lanes, count, inReach);
             break;
         case PairKernel::BoxTriangle:
-            collideBoxTriangle(mesh.box, tri, active, margin, out);
-            break;
-        case PairKernel::HullTriangle:
-            collideHullTriangle(*a.shape->hull, *hulls.at(a.shape->hull.get()).adjacency, a.pose, tri, active, margin,
-                                out);
+            boxTrianglesInReach(mesh.box, margin, lanes, count, inReach);
             break;
         default:
+            std::fill(inReach, inReach + count, true);  // hulls: no reach test, every triangle to the kernel
             break;
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+        Manifold& out = chunk.manifolds[first + k];
+        out.pointCount = 0;
+        if (!inReach[k]) continue;
+        TriangleVertices tri;
+        for (int v = 0; v < 3; ++v)
+            tri[v] = {s.triangles[3 * v][k], s.triangles[3 * v + 1][k], s.triangles[3 * v + 2][k]};
+        const std::uint8_t active = s.activeEdges[k];
+        switch (kernel) {
+            case PairKernel::SphereTriangle:
+                collideSphereTriangle(a.pose.position, a.shape->radius, tri, active, margin, out);
+                break;
+            case PairKernel::CapsuleTriangle:
+                collideCapsuleTriangle(mesh.capsule, tri, active, margin, out);
+                break;
+            case PairKernel::BoxTriangle:
+                collideBoxTriangle(mesh.box, tri, active, margin, out);
+                break;
+            case PairKernel::HullTriangle:
+                collideHullTriangle(*a.shape->hull, *hulls.at(a.shape->hull.get()).adjacency, a.pose, tri, active,
+                                    margin, out);
+                break;
+            default:
+                break;
+        }
     }
 }
 
@@ -621,12 +679,9 @@ void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorag
     if (chunk.manifolds.size() < n) chunk.manifolds.resize(n);
     for (auto& list : scratch.batched) list.clear();
     // Pairs with a batched kernel are collected for it; every other pair runs here, one at a time, with its own
-    // speculative margin. A body on a mesh is one job per triangle, all in a row: their poses and margin are
-    // worked out once.
-    const ContactPair* last = nullptr;
-    Posed a{}, b{};
+    // speculative margin. A body on a mesh is one job per triangle, all in a row: they run together
+    // (collideTriangles), their poses and margin worked out once.
     MeshSide mesh;
-    float margin = 0;
     for (std::uint32_t j = 0; j < n; ++j) {
         const Job& job = chunk.jobs[j];
         Batched batched = Batched::Count;
@@ -654,21 +709,22 @@ void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorag
             continue;
         }
         const ContactPair& p = job.pair;
-        if (last == nullptr || p.a != last->a || p.b != last->b || p.aStatic != last->aStatic ||
-            p.bStatic != last->bStatic || p.childA != last->childA || p.childB != last->childB) {
-            const Motion<float> motionA = motionOf(storage, tables_, p, false);
-            const Motion<float> motionB = motionOf(storage, tables_, p, true);
-            margin = speculativeMargin<float>(params, motionA.v, motionA.w, motionA.reach, motionB.v, motionB.w,
-                                              motionB.reach);
-            a = posedSide(storage, shapes, p, false);
-            b = posedSide(storage, shapes, p, true);
-            if (p.triangle != ~0u) mesh.prepare(a, b);
-            last = &p;
-        }
-        if (p.triangle != ~0u)
-            collideTriangle(job.kernel, a, mesh, p.triangle, margin, hullAdjacency_, chunk.manifolds[j]);
-        else
+        const Motion<float> motionA = motionOf(storage, tables_, p, false);
+        const Motion<float> motionB = motionOf(storage, tables_, p, true);
+        const float margin =
+            speculativeMargin<float>(params, motionA.v, motionA.w, motionA.reach, motionB.v, motionB.w, motionB.reach);
+        const Posed a = posedSide(storage, shapes, p, false);
+        const Posed b = posedSide(storage, shapes, p, true);
+        if (p.triangle == ~0u) {
             collide(job.kernel, a, b, margin, hullAdjacency_, chunk.manifolds[j]);
+            continue;
+        }
+        // The body's triangle jobs come in a row: all of them at once.
+        std::uint32_t end = j + 1;
+        while (end < n && sameBodies(chunk.jobs[end].pair, p) && chunk.jobs[end].pair.triangle != ~0u) ++end;
+        mesh.prepare(a, b);
+        collideTriangles(job.kernel, a, mesh, chunk, j, end, margin, hullAdjacency_, scratch);
+        j = end - 1;
     }
     for (int kernel = 0; kernel < static_cast<int>(Batched::Count); ++kernel)
         if (!scratch.batched[kernel].empty())

@@ -1,0 +1,53 @@
+#pragma once
+// Early rejection of mesh triangles, many at a time in SIMD lanes: of the triangles a body's bounds overlap (about
+// ten per body on a terrain), most lie out of its reach. Before the exact kernels of triangle_pairs.h run one triangle
+// at a time, these tests take all of a body's triangles together and mark the ones that surely get no contact:
+//   sphere and capsule: the core (centre, segment) lies beyond radius + margin from the triangle's plane (both ends
+//     on one side), or beyond it from one of the triangle's edge side planes (the triangle lies inside them);
+//   box: the triangle's plane or one of the box's face axes separates them by more than the margin.
+// Each test is a necessary condition for a contact that the exact kernel would report, with slack: a triangle is
+// marked out only when it is beyond reach by more than 1e-3 of the reach (box: of the margin) plus 1e-5 of the
+// coordinates' size, far above the rounding of either computation. So the kernels' results are unchanged by the
+// filter; it only spares them triangles they would reject themselves. NaN or infinite inputs are never marked out
+// (their comparisons fail), so the exact kernels still see and refuse them.
+//
+// Each test is written once over the lane type (simd/): the wide form runs the triangles in full SIMD batches, the
+// *Scalar form is the same template instantiated for float (the reference for tests and benchmarks); both give the
+// same answer bit for bit.
+#include <cstddef>
+
+#include "narrowphase/convex_pairs.h"
+#include "narrowphase/triangle_pairs.h"
+#include "rubble/math.h"
+
+namespace rubble::detail {
+
+/// Triangles in SoA form: vertex k of triangle i is (x[k][i], y[k][i], z[k][i]). The wide tests read and write
+/// whole SIMD batches: every array must hold triangleLanesPadded(n) readable entries (the padding any finite values).
+struct TriangleLanes {
+    const float* x[3];
+    const float* y[3];
+    const float* z[3];
+};
+
+/// n rounded up to whole SIMD batches: the entries the wide tests read from each array and write to `inReach`.
+std::size_t triangleLanesPadded(std::size_t n);
+
+/// inReach[i] = false when triangle i surely gets no contact with the sphere (centre, radius) within `margin`.
+void sphereTrianglesInReach(Vec3 center, float radius, float margin, const TriangleLanes& tris, std::size_t n,
+                            bool* inReach);
+/// The same for a capsule.
+void capsuleTrianglesInReach(const CapsuleSegment& capsule, float margin, const TriangleLanes& tris, std::size_t n,
+                             bool* inReach);
+/// The same for a box (triangleBox).
+void boxTrianglesInReach(const TriangleBox& box, float margin, const TriangleLanes& tris, std::size_t n, bool* inReach);
+
+/// The same tests one triangle at a time (reads and writes only n entries).
+void sphereTrianglesInReachScalar(Vec3 center, float radius, float margin, const TriangleLanes& tris, std::size_t n,
+                                  bool* inReach);
+void capsuleTrianglesInReachScalar(const CapsuleSegment& capsule, float margin, const TriangleLanes& tris,
+                                   std::size_t n, bool* inReach);
+void boxTrianglesInReachScalar(const TriangleBox& box, float margin, const TriangleLanes& tris, std::size_t n,
+                               bool* inReach);
+
+}  // namespace rubble::detail
