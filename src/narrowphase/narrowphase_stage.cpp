@@ -146,7 +146,7 @@ void collideBoxCapsule(const Posed& box, const Posed& capsule, float margin, Man
     out.normal = -out.normal;
 }
 
-/// One pair through its scalar kernel (not the triangle kernels: collideTriangle).
+/// One pair through its scalar kernel (not the triangle kernels: collideTriangles).
 template <class HullMap>
 void collide(PairKernel kernel, const Posed& a, const Posed& b, float margin, const HullMap& hulls, Manifold& out) {
     auto adjacency = [&](const Posed& p) -> const HullAdjacency& { return *hulls.at(p.shape->hull.get()).adjacency; };
@@ -189,24 +189,18 @@ void collide(PairKernel kernel, const Posed& a, const Posed& b, float margin, co
         case PairKernel::BoxTriangle:
         case PairKernel::HullTriangle:
         case PairKernel::Count:
-            break;  // triangles: collideTriangle
+            break;  // triangles: collideTriangles
     }
 }
 
-/// Whether two jobs' pairs are the same two bodies (and compound children): a body's triangle jobs share them.
-bool sameBodies(const ContactPair& p, const ContactPair& q) {
-    return p.a == q.a && p.b == q.b && p.aStatic == q.aStatic && p.bStatic == q.bStatic && p.childA == q.childA &&
-           p.childB == q.childB;
-}
-
-/// Body A against the triangles of jobs [first, end) of `chunk` (a run of one body against the mesh `mesh`, prepared
-/// for A): the vertices of all of them are fetched first, the reach tests (triangle_reach.h) run over them in SIMD
-/// lanes, and the exact kernel only sees the triangles they leave.
+/// Body A against the triangles of a run job (against the mesh `mesh`, prepared for A): the vertices of all of them
+/// are fetched first, the reach tests (triangle_reach.h) run over them in SIMD lanes, and the exact kernel only sees
+/// the triangles they leave. Touching triangles are appended to the chunk's mesh manifolds.
 template <class HullMap>
-void collideTriangles(PairKernel kernel, const Posed& a, const MeshSide& mesh, NarrowPhaseStage::Chunk& chunk,
-                      std::size_t first, std::size_t end, float margin, const HullMap& hulls,
+void collideTriangles(const NarrowPhaseStage::Job& job, const std::uint32_t* triangles, const Posed& a,
+                      const MeshSide& mesh, float margin, const HullMap& hulls, NarrowPhaseStage::Chunk& chunk,
                       NarrowPhaseStage::Scratch& s) {
-    const std::size_t count = end - first, padded = triangleLanesPadded(count);
+    const std::size_t count = job.triangles, padded = triangleLanesPadded(count);
     for (std::vector<float>& lane : s.triangles)
         if (lane.size() < padded) lane.resize(padded);
     if (s.activeEdges.size() < count) s.activeEdges.resize(count);
@@ -216,9 +210,9 @@ void collideTriangles(PairKernel kernel, const Posed& a, const MeshSide& mesh, N
     }
     for (std::size_t k = 0; k < padded; ++k) {
         // The padding repeats the last triangle: finite values the wide tests may read.
+        const std::size_t at = std::min(k, count - 1);
         TriangleVertices tri;
-        mesh.triangle(chunk.jobs[first + std::min(k, count - 1)].pair.triangle, tri,
-                      s.activeEdges[std::min(k, count - 1)]);
+        mesh.triangle(triangles[at], tri, s.activeEdges[at]);
         for (int v = 0; v < 3; ++v) {
             s.triangles[3 * v][k] = tri[v].x;
             s.triangles[3 * v + 1][k] = tri[v].y;
@@ -229,7 +223,7 @@ void collideTriangles(PairKernel kernel, const Posed& a, const MeshSide& mesh, N
                               {s.triangles[1].data(), s.triangles[4].data(), s.triangles[7].data()},
                               {s.triangles[2].data(), s.triangles[5].data(), s.triangles[8].data()}};
     bool* inReach = s.inReach.get();
-    switch (kernel) {
+    switch (job.kernel) {
         case PairKernel::SphereTriangle:
             sphereTrianglesInReach(a.pose.position, a.shape->radius, margin, lanes, count, inReach);
             break;
@@ -243,15 +237,15 @@ void collideTriangles(PairKernel kernel, const Posed& a, const MeshSide& mesh, N
             std::fill(inReach, inReach + count, true);  // hulls: no reach test, every triangle to the kernel
             break;
     }
+    Manifold out;
     for (std::size_t k = 0; k < count; ++k) {
-        Manifold& out = chunk.manifolds[first + k];
-        out.pointCount = 0;
         if (!inReach[k]) continue;
         TriangleVertices tri;
         for (int v = 0; v < 3; ++v)
             tri[v] = {s.triangles[3 * v][k], s.triangles[3 * v + 1][k], s.triangles[3 * v + 2][k]};
         const std::uint8_t active = s.activeEdges[k];
-        switch (kernel) {
+        out.pointCount = 0;
+        switch (job.kernel) {
             case PairKernel::SphereTriangle:
                 collideSphereTriangle(a.pose.position, a.shape->radius, tri, active, margin, out);
                 break;
@@ -268,7 +262,19 @@ void collideTriangles(PairKernel kernel, const Posed& a, const MeshSide& mesh, N
             default:
                 break;
         }
+        if (out.pointCount == 0) continue;
+        ContactPair pair = job.pair;
+        pair.triangle = triangles[k];
+        chunk.meshPairs.push_back(pair);
+        chunk.meshManifolds.push_back(out);
     }
+}
+
+/// A manifold's normal, count and used points (the unused point slots are never read).
+void copyManifold(const Manifold& from, Manifold& to) {
+    to.normal = from.normal;
+    to.pointCount = from.pointCount;
+    for (int k = 0; k < from.pointCount; ++k) to.points[k] = from.points[k];
 }
 
 /// The pair's margin for this step (see NarrowPhaseStage::run): the fixed margin plus how far the two surfaces can
@@ -572,8 +578,11 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
         chunk.jobs.clear();
         // A is the body whose shape kind is lower, so each kernel sees its shapes in its own argument order.
         // Compounds expand into one job per child (per child pair for two compounds), in child order.
+        // `run`: for a body against a mesh, the index of its triangle in meshTriangles (a run of one); else ~0u.
         auto addJob = [&](std::uint32_t first, bool firstStatic, std::uint32_t second, bool secondStatic,
-                          std::uint32_t triangle) {
+                          std::uint32_t run) {
+            const std::uint32_t triangle = run == ~0u ? ~0u : candidates.meshTriangles[run];
+            const std::uint32_t runLength = run == ~0u ? 0u : 1u, runStart = run == ~0u ? 0u : run;
             const std::uint32_t shape1 = firstStatic ? storage.statics.shape[first] : storage.moving.shape[first];
             const std::uint32_t shape2 = secondStatic ? storage.statics.shape[second] : storage.moving.shape[second];
             const ShapeKind kind1 = tables_.kind[shape1], kind2 = tables_.kind[shape2];
@@ -586,6 +595,7 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
                     job.pair = {first, second, firstStatic, secondStatic, triangle, kNoChild, kNoChild};
                     job.kernel = kernels_[static_cast<int>(kind1)][static_cast<int>(kind2)];
                 }
+                job.firstTriangle = runStart, job.triangles = runLength;
                 chunk.jobs.push_back(job);
                 return;
             }
@@ -607,6 +617,7 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
                         job.pair = {first, second, firstStatic, secondStatic, triangle, child1, child2};
                         job.kernel = pairKernel(k1, k2);
                     }
+                    job.firstTriangle = runStart, job.triangles = runLength;
                     chunk.jobs.push_back(job);
                 }
         };
@@ -616,8 +627,9 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             const BodyPair& p = candidates.statics[u - movingCount];
             addJob(p.a, false, p.b, true, ~0u);
         }
-        // A body against a mesh: one job per triangle (the mesh is always B). Mesh pairs hold consecutive runs of
-        // meshTriangles, so the pair of the chunk's first triangle is found once and then followed.
+        // A body against a mesh (always B): one job per run of its triangles in the chunk. Mesh pairs hold
+        // consecutive runs of meshTriangles, so the pair of the chunk's first triangle is found once and then
+        // followed.
         if (end > movingCount + staticCount) {
             const auto first =
                 static_cast<std::uint32_t>(std::max(begin, movingCount + staticCount) - movingCount - staticCount);
@@ -628,23 +640,19 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             for (auto t = first; t < last; ++mesh) {
                 const std::uint32_t runEnd = std::min(last, mesh->firstTriangle + mesh->triangleCount);
                 if (t >= runEnd) continue;
-                // The body's job for its first triangle here stands for the rest of its run (a compound body makes
+                // The body's job for its first triangle here grows to the rest of its run (a compound body makes
                 // one job per child and triangle, in that order, so it goes through addJob for every triangle).
                 const std::size_t at = chunk.jobs.size();
-                addJob(mesh->moving, false, mesh->staticBody, true, candidates.meshTriangles[t]);
+                addJob(mesh->moving, false, mesh->staticBody, true, t);
                 if (chunk.jobs.size() != at + 1 || chunk.jobs[at].pair.childA != kNoChild) {
-                    for (++t; t < runEnd; ++t)
-                        addJob(mesh->moving, false, mesh->staticBody, true, candidates.meshTriangles[t]);
+                    for (++t; t < runEnd; ++t) addJob(mesh->moving, false, mesh->staticBody, true, t);
                     continue;
                 }
-                Job job = chunk.jobs[at];
-                for (++t; t < runEnd; ++t) {
-                    job.pair.triangle = candidates.meshTriangles[t];
-                    chunk.jobs.push_back(job);
-                }
+                chunk.jobs[at].triangles = runEnd - t;
+                t = runEnd;
             }
         }
-        runChunk(chunk, *scratch_[static_cast<std::size_t>(worker)], storage, shapes, params);
+        runChunk(chunk, *scratch_[static_cast<std::size_t>(worker)], storage, shapes, candidates.meshTriangles, params);
     });
 
     // Each chunk's touching jobs go to the output at the offset its predecessors leave: canonical order on any
@@ -663,20 +671,27 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
         for (std::size_t c = begin; c < end; ++c) {
             const Chunk& chunk = chunks_[c];
             std::size_t o = chunk.offset;
-            for (std::size_t j = 0; j < chunk.jobs.size(); ++j) {
+            for (std::size_t j = 0; j < chunk.jobs.size() && chunk.jobs[j].triangles == 0; ++j) {
                 if (chunk.manifolds[j].pointCount == 0) continue;
                 out.pairs[o] = chunk.jobs[j].pair;
-                out.manifolds[o] = chunk.manifolds[j];
+                copyManifold(chunk.manifolds[j], out.manifolds[o]);
                 ++o;
+            }
+            for (std::size_t k = 0; k < chunk.meshPairs.size(); ++k, ++o) {
+                out.pairs[o] = chunk.meshPairs[k];
+                copyManifold(chunk.meshManifolds[k], out.manifolds[o]);
             }
         }
     });
 }
 
 void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorage& storage,
-                                const std::vector<Shape>& shapes, const NarrowPhaseParams& params) const {
+                                const std::vector<Shape>& shapes, const std::vector<std::uint32_t>& meshTriangles,
+                                const NarrowPhaseParams& params) const {
     const std::size_t n = chunk.jobs.size();
     if (chunk.manifolds.size() < n) chunk.manifolds.resize(n);
+    chunk.meshPairs.clear();
+    chunk.meshManifolds.clear();
     for (auto& list : scratch.batched) list.clear();
     // Pairs with a batched kernel are collected for it; every other pair runs here, one at a time, with its own
     // speculative margin. A body on a mesh is one job per triangle, all in a row: they run together
@@ -715,29 +730,27 @@ void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorag
             speculativeMargin<float>(params, motionA.v, motionA.w, motionA.reach, motionB.v, motionB.w, motionB.reach);
         const Posed a = posedSide(storage, shapes, p, false);
         const Posed b = posedSide(storage, shapes, p, true);
-        if (p.triangle == ~0u) {
+        if (job.triangles == 0) {
             collide(job.kernel, a, b, margin, hullAdjacency_, chunk.manifolds[j]);
             continue;
         }
-        // The body's triangle jobs come in a row: all of them at once.
-        std::uint32_t end = j + 1;
-        while (end < n && sameBodies(chunk.jobs[end].pair, p) && chunk.jobs[end].pair.triangle != ~0u) ++end;
         mesh.prepare(a, b);
-        collideTriangles(job.kernel, a, mesh, chunk, j, end, margin, hullAdjacency_, scratch);
-        j = end - 1;
+        collideTriangles(job, meshTriangles.data() + job.firstTriangle, a, mesh, margin, hullAdjacency_, chunk,
+                         scratch);
     }
     for (int kernel = 0; kernel < static_cast<int>(Batched::Count); ++kernel)
         if (!scratch.batched[kernel].empty())
             collideBatched(static_cast<Batched>(kernel), scratch.batched[kernel], chunk, scratch, storage, shapes,
                            tables_, params);
 
-    chunk.touching = 0;
+    chunk.touching = static_cast<std::uint32_t>(chunk.meshManifolds.size());
     chunk.points = 0;
-    for (std::size_t j = 0; j < n; ++j) {
+    for (std::size_t j = 0; j < n && chunk.jobs[j].triangles == 0; ++j) {
         const int count = chunk.manifolds[j].pointCount;
         chunk.touching += count > 0 ? 1u : 0u;
         chunk.points += static_cast<std::uint32_t>(count);
     }
+    for (const Manifold& m : chunk.meshManifolds) chunk.points += static_cast<std::uint32_t>(m.pointCount);
 }
 
 }  // namespace rubble::detail
