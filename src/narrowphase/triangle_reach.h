@@ -2,9 +2,11 @@
 // Early rejection of mesh triangles, many at a time in SIMD lanes: of the triangles a body's bounds overlap (about
 // ten per body on a terrain), most lie out of its reach. Before the exact kernels of triangle_pairs.h run one triangle
 // at a time, these tests take all of a body's triangles together and mark the ones that surely get no contact:
-//   sphere and capsule: the core (centre, segment) lies beyond radius + margin from the triangle's plane (both ends
-//     on one side), or beyond it from one of the triangle's edge side planes (the triangle lies inside them);
-//   box: the triangle's plane or one of the box's face axes separates them by more than the margin.
+//   sphere and capsule: the exact distance of the core (centre, segment) from the triangle exceeds radius + margin
+//     (the closest-point computations of the exact kernels -- point against the triangle's Voronoi regions, segment
+//     against the edges, the segment's crossing of the plane -- in lanes, every branch computed and selected);
+//   box: the triangle's plane or one of the box's face axes separates them by more than the margin (most of the
+//     triangles a box reaches touch it, so the rest of the SAT is left to the kernel).
 // Each test is a necessary condition for a contact that the exact kernel would report, with slack: a triangle is
 // marked out only when it is beyond reach by more than 1e-3 of the reach (box: of the margin) plus 1e-5 of the
 // coordinates' size, far above the rounding of either computation. So the kernels' results are unchanged by the
