@@ -2,9 +2,11 @@
 // cells, 2 m amplitude, 8 m wavelength, like S3's terrain): each body with the triangles its bounds overlap (grown by
 // the margin), the batch the stage hands over. items_per_second counts triangles.
 //   BM_TriangleReach*/0 the tests one triangle at a time (the scalar form), /1 in SIMD lanes: same inputs, same
-//     answers (tests/narrowphase/triangle_reach_test.cpp).
-//   BM_TriangleRun*/0 the exact kernel on every triangle of each body, /1 the wide reach tests first and the kernel on
-//     the triangles they leave: the stage's way. Both give the same manifolds.
+//     answers (tests/narrowphase/triangle_reach_test.cpp). BM_BoxTriangleAxes the same for the box kernel's SAT
+//     (triangle_pairs.h), which the stage runs for boxes instead of a reach test.
+//   BM_TriangleRun*/0 the exact kernel on every triangle of each body, /1 the wide tests first (for a box: its SAT)
+//     and the kernel on the triangles they leave (a box's given its SAT's answer): the stage's way. Both give the same
+//     manifolds.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -128,7 +130,9 @@ std::vector<BodyBatch> makeBodies(Body kind) {
     return bodies;
 }
 
-void reachTests(Body kind, const BodyBatch& b, bool wide, bool* inReach) {
+/// The stage's test per kind: the reach tests for spheres and capsules, the box kernel's whole SAT for boxes
+/// (`axes`, whose kind marks the triangles left for the kernel).
+void reachTests(Body kind, const BodyBatch& b, bool wide, bool* inReach, BoxTriangleAxis* axes) {
     switch (kind) {
         case Body::Sphere:
             (wide ? sphereTrianglesInReach : sphereTrianglesInReachScalar)(b.center, b.radius, kMargin, b.view(),
@@ -139,12 +143,14 @@ void reachTests(Body kind, const BodyBatch& b, bool wide, bool* inReach) {
                                                                              inReach);
             break;
         case Body::Box:
-            (wide ? boxTrianglesInReach : boxTrianglesInReachScalar)(b.box, kMargin, b.view(), b.count, inReach);
+            (wide ? boxTriangleAxes : boxTriangleAxesScalar)(b.box, kMargin, b.view(), b.count, axes);
+            for (std::size_t k = 0; k < b.count; ++k) inReach[k] = axes[k].kind >= 0;
             break;
     }
 }
 
-int kernel(Body kind, const BodyBatch& b, std::size_t k, Manifold& m) {
+/// The exact kernel; a box given its SAT's answer when `axis` is set.
+int kernel(Body kind, const BodyBatch& b, std::size_t k, const BoxTriangleAxis* axis, Manifold& m) {
     const TriangleVertices t = b.triangle(k);
     switch (kind) {
         case Body::Sphere:
@@ -152,7 +158,8 @@ int kernel(Body kind, const BodyBatch& b, std::size_t k, Manifold& m) {
         case Body::Capsule:
             return collideCapsuleTriangle(b.capsule, t, b.active[k], kMargin, m);
         case Body::Box:
-            return collideBoxTriangle(b.box, t, b.active[k], kMargin, m);
+            return axis ? collideBoxTriangle(b.box, t, b.active[k], kMargin, *axis, m)
+                        : collideBoxTriangle(b.box, t, b.active[k], kMargin, m);
     }
     return 0;
 }
@@ -169,10 +176,11 @@ void reach(benchmark::State& state, Body kind) {
     std::size_t padded = 0;
     for (const BodyBatch& b : bodies) padded = std::max(padded, triangleLanesPadded(b.count));
     const auto inReach = std::make_unique<bool[]>(padded);
+    std::vector<BoxTriangleAxis> axes(padded);
     std::int64_t kept = 0;
     for (auto _ : state) {
         for (const BodyBatch& b : bodies) {
-            reachTests(kind, b, wide, inReach.get());
+            reachTests(kind, b, wide, inReach.get(), axes.data());
             kept += std::count(inReach.get(), inReach.get() + b.count, true);
             benchmark::DoNotOptimize(inReach.get());
         }
@@ -189,17 +197,18 @@ void runs(benchmark::State& state, Body kind) {
     std::size_t padded = 0;
     for (const BodyBatch& b : bodies) padded = std::max(padded, triangleLanesPadded(b.count));
     const auto inReach = std::make_unique<bool[]>(padded);
+    std::vector<BoxTriangleAxis> axes(padded);
     std::int64_t manifolds = 0;
     for (auto _ : state) {
         for (const BodyBatch& b : bodies) {
             if (filtered)
-                reachTests(kind, b, true, inReach.get());
+                reachTests(kind, b, true, inReach.get(), axes.data());
             else
                 std::fill(inReach.get(), inReach.get() + b.count, true);
             for (std::size_t k = 0; k < b.count; ++k) {
                 if (!inReach[k]) continue;
                 Manifold m;
-                manifolds += kernel(kind, b, k, m) > 0;
+                manifolds += kernel(kind, b, k, filtered && kind == Body::Box ? &axes[k] : nullptr, m) > 0;
                 benchmark::DoNotOptimize(m);
             }
         }
@@ -212,7 +221,7 @@ void runs(benchmark::State& state, Body kind) {
 
 void BM_TriangleReachSphere(benchmark::State& state) { reach(state, Body::Sphere); }
 void BM_TriangleReachCapsule(benchmark::State& state) { reach(state, Body::Capsule); }
-void BM_TriangleReachBox(benchmark::State& state) { reach(state, Body::Box); }
+void BM_BoxTriangleAxes(benchmark::State& state) { reach(state, Body::Box); }
 void BM_TriangleRunSphere(benchmark::State& state) { runs(state, Body::Sphere); }
 void BM_TriangleRunCapsule(benchmark::State& state) { runs(state, Body::Capsule); }
 void BM_TriangleRunBox(benchmark::State& state) { runs(state, Body::Box); }
@@ -221,7 +230,7 @@ void BM_TriangleRunBox(benchmark::State& state) { runs(state, Body::Box); }
 
 BENCHMARK(BM_TriangleReachSphere)->Arg(0)->Arg(1)->ArgName("wide");
 BENCHMARK(BM_TriangleReachCapsule)->Arg(0)->Arg(1)->ArgName("wide");
-BENCHMARK(BM_TriangleReachBox)->Arg(0)->Arg(1)->ArgName("wide");
+BENCHMARK(BM_BoxTriangleAxes)->Arg(0)->Arg(1)->ArgName("wide");
 BENCHMARK(BM_TriangleRunSphere)->Arg(0)->Arg(1)->ArgName("reach_tests");
 BENCHMARK(BM_TriangleRunCapsule)->Arg(0)->Arg(1)->ArgName("reach_tests");
 BENCHMARK(BM_TriangleRunBox)->Arg(0)->Arg(1)->ArgName("reach_tests");

@@ -60,6 +60,7 @@ struct NarrowPhaseStage::Scratch {
     std::vector<std::uint8_t> activeEdges;
     std::unique_ptr<bool[]> inReach;
     std::size_t inReachCapacity = 0;
+    std::vector<BoxTriangleAxis> boxAxes;  ///< a box's SAT per triangle
 };
 
 namespace {
@@ -231,7 +232,10 @@ void collideTriangles(const NarrowPhaseStage::Job& job, const std::uint32_t* tri
             capsuleTrianglesInReach(mesh.capsule, margin, lanes, count, inReach);
             break;
         case PairKernel::BoxTriangle:
-            boxTrianglesInReach(mesh.box, margin, lanes, count, inReach);
+            // The box kernel's whole SAT runs in lanes (most of the triangles a box reaches touch it).
+            if (s.boxAxes.size() < padded) s.boxAxes.resize(padded);
+            boxTriangleAxes(mesh.box, margin, lanes, count, s.boxAxes.data());
+            for (std::size_t k = 0; k < count; ++k) inReach[k] = s.boxAxes[k].kind >= 0;
             break;
         default:
             std::fill(inReach, inReach + count, true);  // hulls: no reach test, every triangle to the kernel
@@ -253,7 +257,7 @@ void collideTriangles(const NarrowPhaseStage::Job& job, const std::uint32_t* tri
                 collideCapsuleTriangle(mesh.capsule, tri, active, margin, out);
                 break;
             case PairKernel::BoxTriangle:
-                collideBoxTriangle(mesh.box, tri, active, margin, out);
+                collideBoxTriangle(mesh.box, tri, active, margin, s.boxAxes[k], out);
                 break;
             case PairKernel::HullTriangle:
                 collideHullTriangle(*a.shape->hull, *hulls.at(a.shape->hull.get()).adjacency, a.pose, tri, active,

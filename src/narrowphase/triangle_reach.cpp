@@ -14,7 +14,7 @@ using simd::FloatW;
 using simd::MaskOf;
 using simd::Vec3W;
 
-/// Relative slack on the reach (or the box's margin), and on the size of the coordinates (see the header).
+/// Relative slack on the reach, and on the size of the coordinates (see the header).
 constexpr float kReachSlack = 1e-3f;
 constexpr float kSizeSlack = 1e-5f;
 
@@ -138,33 +138,6 @@ void capsuleAt(const CapsuleSegment& capsule, float reach, const TriangleLanes& 
     storeInReach<F>(inReach + i, beyond(d2, F(reach), sizeOf(p0, p1, b, c)), tri);
 }
 
-template <class F>
-void boxAt(const TriangleBox& box, float margin, const TriangleLanes& t, std::size_t i, bool* inReach) {
-    const Triangle<F> tri = loadTriangle<F>(t, i);
-    const Vec3 c = box.pose.position, h = box.halfExtents;
-    Vec3W<F> v[3];  // relative to the box centre
-    for (int k = 0; k < 3; ++k) v[k] = tri.v[k] - Vec3W<F>::broadcast(c.x, c.y, c.z);
-    const F size =
-        simd::max(simd::max(maxAbs(v[0]), maxAbs(v[1])), simd::max(maxAbs(v[2]), F(std::max({h.x, h.y, h.z}))));
-    const F limit = F(margin * (1.0f + kReachSlack)) + size * F(kSizeSlack);
-    const F hk[3] = {F(h.x), F(h.y), F(h.z)};
-    Vec3W<F> axis[3];  // the box axes in the world (columns of toWorld)
-    for (int k = 0; k < 3; ++k) axis[k] = Vec3W<F>::broadcast(box.toWorld(0, k), box.toWorld(1, k), box.toWorld(2, k));
-    // The triangle's plane (either side): |dot(n, v0)| - radius of the box along n beyond limit |n|.
-    const Vec3W<F> n = cross(v[1] - v[0], v[2] - v[0]);
-    const F radius =
-        hk[0] * simd::abs(dot(n, axis[0])) + hk[1] * simd::abs(dot(n, axis[1])) + hk[2] * simd::abs(dot(n, axis[2]));
-    const F gap = simd::abs(dot(n, v[0])) - radius;
-    MaskOf<F> out = simd::andMask(gap > F(0.0f), gap * gap > limit * limit * dot(n, n));
-    // The box's face axes: the whole triangle beyond a face by more than the limit.
-    for (int k = 0; k < 3; ++k) {
-        const F p0 = dot(axis[k], v[0]), p1 = dot(axis[k], v[1]), p2 = dot(axis[k], v[2]);
-        const F lo = simd::min(p0, simd::min(p1, p2)), hi = simd::max(p0, simd::max(p1, p2));
-        out = simd::orMask(out, simd::orMask(lo - hk[k] > limit, -hi - hk[k] > limit));
-    }
-    storeInReach<F>(inReach + i, out, tri);
-}
-
 /// Full SIMD batches over the padded range, or every triangle one at a time.
 template <class Wide, class Narrow>
 void run(std::size_t n, bool wide, Wide wideAt, Narrow scalarAt) {
@@ -197,19 +170,7 @@ void capsule(const CapsuleSegment& c, float margin, const TriangleLanes& t, std:
         [&](std::size_t i) { capsuleAt<float>(c, reach, t, i, inReach); });
 }
 
-void box(const TriangleBox& b, float margin, const TriangleLanes& t, std::size_t n, bool* inReach, bool wide) {
-    const Mat3& m = b.toWorld;
-    const bool finiteBody = isFinite(b.pose.position) && isFinite(b.halfExtents) && std::isfinite(margin) &&
-                            isFinite(m.rows[0]) && isFinite(m.rows[1]) && isFinite(m.rows[2]);
-    if (allIn(finiteBody, n, wide, inReach)) return;
-    run(
-        n, wide, [&](std::size_t i) { boxAt<FloatW>(b, margin, t, i, inReach); },
-        [&](std::size_t i) { boxAt<float>(b, margin, t, i, inReach); });
-}
-
 }  // namespace
-
-std::size_t triangleLanesPadded(std::size_t n) { return simd::roundUpToLanes<FloatW>(n); }
 
 void sphereTrianglesInReach(Vec3 center, float radius, float margin, const TriangleLanes& tris, std::size_t n,
                             bool* inReach) {
@@ -219,10 +180,6 @@ void capsuleTrianglesInReach(const CapsuleSegment& capsule_, float margin, const
                              bool* inReach) {
     capsule(capsule_, margin, tris, n, inReach, true);
 }
-void boxTrianglesInReach(const TriangleBox& box_, float margin, const TriangleLanes& tris, std::size_t n,
-                         bool* inReach) {
-    box(box_, margin, tris, n, inReach, true);
-}
 
 void sphereTrianglesInReachScalar(Vec3 center, float radius, float margin, const TriangleLanes& tris, std::size_t n,
                                   bool* inReach) {
@@ -231,10 +188,6 @@ void sphereTrianglesInReachScalar(Vec3 center, float radius, float margin, const
 void capsuleTrianglesInReachScalar(const CapsuleSegment& capsule_, float margin, const TriangleLanes& tris,
                                    std::size_t n, bool* inReach) {
     capsule(capsule_, margin, tris, n, inReach, false);
-}
-void boxTrianglesInReachScalar(const TriangleBox& box_, float margin, const TriangleLanes& tris, std::size_t n,
-                               bool* inReach) {
-    box(box_, margin, tris, n, inReach, false);
 }
 
 }  // namespace rubble::detail

@@ -5,10 +5,10 @@
 //   sphere and capsule: the exact distance of the core (centre, segment) from the triangle exceeds radius + margin
 //     (the closest-point computations of the exact kernels -- point against the triangle's Voronoi regions, segment
 //     against the edges, the segment's crossing of the plane -- in lanes, every branch computed and selected);
-//   box: the triangle's plane or one of the box's face axes separates them by more than the margin (most of the
-//     triangles a box reaches touch it, so the rest of the SAT is left to the kernel).
+// A box needs no such test: most of the triangles it reaches touch it, and the box kernel's whole SAT runs in lanes
+// instead (boxTriangleAxes, triangle_pairs.h).
 // Each test is a necessary condition for a contact that the exact kernel would report, with slack: a triangle is
-// marked out only when it is beyond reach by more than 1e-3 of the reach (box: of the margin) plus 1e-5 of the
+// marked out only when it is beyond reach by more than 1e-3 of the reach plus 1e-5 of the
 // coordinates' size, far above the rounding of either computation. So the kernels' results are unchanged by the
 // filter; it only spares them triangles they would reject themselves. NaN or infinite inputs are never marked out
 // (their comparisons fail), so the exact kernels still see and refuse them.
@@ -24,32 +24,17 @@
 
 namespace rubble::detail {
 
-/// Triangles in SoA form: vertex k of triangle i is (x[k][i], y[k][i], z[k][i]). The wide tests read and write
-/// whole SIMD batches: every array must hold triangleLanesPadded(n) readable entries (the padding any finite values).
-struct TriangleLanes {
-    const float* x[3];
-    const float* y[3];
-    const float* z[3];
-};
-
-/// n rounded up to whole SIMD batches: the entries the wide tests read from each array and write to `inReach`.
-std::size_t triangleLanesPadded(std::size_t n);
-
 /// inReach[i] = false when triangle i surely gets no contact with the sphere (centre, radius) within `margin`.
 void sphereTrianglesInReach(Vec3 center, float radius, float margin, const TriangleLanes& tris, std::size_t n,
                             bool* inReach);
 /// The same for a capsule.
 void capsuleTrianglesInReach(const CapsuleSegment& capsule, float margin, const TriangleLanes& tris, std::size_t n,
                              bool* inReach);
-/// The same for a box (triangleBox).
-void boxTrianglesInReach(const TriangleBox& box, float margin, const TriangleLanes& tris, std::size_t n, bool* inReach);
 
 /// The same tests one triangle at a time (reads and writes only n entries).
 void sphereTrianglesInReachScalar(Vec3 center, float radius, float margin, const TriangleLanes& tris, std::size_t n,
                                   bool* inReach);
 void capsuleTrianglesInReachScalar(const CapsuleSegment& capsule, float margin, const TriangleLanes& tris,
                                    std::size_t n, bool* inReach);
-void boxTrianglesInReachScalar(const TriangleBox& box, float margin, const TriangleLanes& tris, std::size_t n,
-                               bool* inReach);
 
 }  // namespace rubble::detail
