@@ -70,7 +70,10 @@ struct Posed {
     const Shape* shape;
 };
 
-Posed posed(const BodyStorage& storage, const std::vector<Shape>& shapes, std::uint32_t i, bool isStatic) {
+// Always inlined, as posedSide: returned through memory, the pose is written in pieces and read back whole, which
+// stalls on store forwarding in the per-pair loop.
+[[gnu::always_inline]] inline Posed posed(const BodyStorage& storage, const std::vector<Shape>& shapes, std::uint32_t i,
+                                          bool isStatic) {
     if (isStatic) {
         const StaticBodies& s = storage.statics;
         return {{{s.px[i], s.py[i], s.pz[i]}, {s.qx[i], s.qy[i], s.qz[i], s.qw[i]}}, &shapes[s.shape[i]]};
@@ -82,7 +85,8 @@ Posed posed(const BodyStorage& storage, const std::vector<Shape>& shapes, std::u
 }
 
 /// A side of a contact pair: the body's shape, or the compound child the pair names, posed in the world.
-Posed posedSide(const BodyStorage& storage, const std::vector<Shape>& shapes, const ContactPair& p, bool sideB) {
+[[gnu::always_inline]] inline Posed posedSide(const BodyStorage& storage, const std::vector<Shape>& shapes,
+                                              const ContactPair& p, bool sideB) {
     Posed body = sideB ? posed(storage, shapes, p.b, p.bStatic) : posed(storage, shapes, p.a, p.aStatic);
     const std::uint16_t child = sideB ? p.childB : p.childA;
     if (child == kNoChild) return body;
