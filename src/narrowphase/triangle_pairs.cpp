@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <vector>
 
 #include "narrowphase/clip.h"
@@ -515,6 +516,8 @@ BoxSat<F> boxTriangleSat(const TriangleBox& box, const simd::Vec3W<F> (&tri)[3],
     // num / sqrt(len2) > limit without the square root (the scalar `exceeds`).
     auto exceeds = [&](const F& num, const F& limit, const F& len2) {
         const F lhs = num * num, rhs = limit * limit * len2;
+        if constexpr (std::is_same_v<F, float>)  // one triangle: branch (both forms give the same answer)
+            return limit >= 0 ? num > 0 && lhs > rhs : num >= 0 || lhs < rhs;
         const simd::MaskOf<F> nonNegative = limit >= zero;
         return orMask(andMask(nonNegative, andMask(num > zero, lhs > rhs)),
                       andMask(notMask(nonNegative), orMask(num >= zero, lhs < rhs)));
