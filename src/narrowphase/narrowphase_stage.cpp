@@ -258,7 +258,7 @@ void collideTriangles(const NarrowPhaseStage::Job& job, const std::uint32_t* tri
                 collideSphereTriangle(a.pose.position, a.shape->radius, tri, active, margin, out);
                 break;
             case PairKernel::CapsuleTriangle:
-                collideCapsuleTriangle(mesh.capsule, tri, active, margin, out);
+                collideCapsuleTriangle(mesh.capsule, tri, active, margin, out, /*inReach=*/true);
                 break;
             case PairKernel::BoxTriangle:
                 collideBoxTriangle(mesh.box, tri, active, margin, s.boxAxes[k], out);

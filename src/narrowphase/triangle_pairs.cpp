@@ -286,7 +286,7 @@ int collideSphereTriangle(Vec3 center, float radius, const TriangleVertices& tri
 // ---- Capsule ----------------------------------------------------------------------------------------------------
 
 int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices& tri, std::uint8_t activeEdges,
-                           float margin, Manifold& out) {
+                           float margin, Manifold& out, bool inReach) {
     out.pointCount = 0;
     const Vec3 origin = tri[0];
     const Vec3 v[3] = {{}, tri[1] - origin, tri[2] - origin};
@@ -298,8 +298,10 @@ int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices
     if (!isFinite(s0) || !isFinite(axis)) return 0;
     const float reach = radius + margin;
     const float h0 = dot(faceN, s0), h1 = dot(faceN, s0 + axis);
-    if (beyondReach(h0, h1, reach, 1.0f)) return 0;
-    for (int e = 0; e < 3; ++e) {
+    // The quick rejections below only ever refuse what the exact test further down refuses too: a caller that has
+    // found the triangle in reach already skips them.
+    if (!inReach && beyondReach(h0, h1, reach, 1.0f)) return 0;
+    for (int e = 0; e < 3 && !inReach; ++e) {
         const Vec3 edge = v[e == 2 ? 0 : e + 1] - v[e], side = cross(edge, faceN);  // outward, |side| = |edge|
         const float f0 = dot(side, s0 - v[e]), f1 = dot(side, s0 + axis - v[e]);
         if (f0 > 0 && f1 > 0 && beyondReach(f0, f1, reach, dot(edge, edge))) return 0;

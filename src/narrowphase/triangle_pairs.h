@@ -92,9 +92,11 @@ inline constexpr float kCapsuleFaceParallelSine = 0.05f;
 int collideSphereTriangle(Vec3 center, float radius, const TriangleVertices& tri, std::uint8_t activeEdges,
                           float margin, Manifold& out);
 
-/// Capsule A against triangle B. Returns 0, 1 or 2.
+/// Capsule A against triangle B. Returns 0, 1 or 2. `inReach`: the caller has found the triangle within the
+/// capsule's reach (capsuleTrianglesInReach, triangle_reach.h); the kernel then skips its quick rejections, which
+/// never change its result.
 int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices& tri, std::uint8_t activeEdges,
-                           float margin, Manifold& out);
+                           float margin, Manifold& out, bool inReach = false);
 
 /// Box A (pose, half extents) against triangle B. Returns 0 to 4.
 int collideBoxTriangle(const Transform& boxPose, Vec3 halfExtents, const TriangleVertices& tri,

@@ -132,6 +132,14 @@ TEST(TriangleReach, CapsuleNeverRejectsAContactAndMatchesScalar) {
                 return collideCapsuleTriangle(capsule, t, kAllEdgesActive, margin, m);
             },
             tally, body);
+        // Told the triangle is in reach, the kernel skips its quick rejections and gives the same manifold.
+        for (std::size_t k = 0; k < batch.triangles.size(); ++k) {
+            if (!batch.wide[k]) continue;
+            Manifold full, told;
+            const int count = collideCapsuleTriangle(capsule, batch.triangles[k], kAllEdgesActive, margin, full);
+            ASSERT_EQ(count, collideCapsuleTriangle(capsule, batch.triangles[k], kAllEdgesActive, margin, told, true));
+            EXPECT_EQ(std::memcmp(&full, &told, sizeof full), 0) << body << " " << k;
+        }
     }
     EXPECT_GT(tally.contacts, 10000);
     EXPECT_GT(tally.rejected, tally.kept / 4);
