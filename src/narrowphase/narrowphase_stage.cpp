@@ -213,17 +213,18 @@ void collideTriangles(const NarrowPhaseStage::Job& job, const std::uint32_t* tri
         s.inReach = std::make_unique<bool[]>(padded);
         s.inReachCapacity = padded;
     }
-    for (std::size_t k = 0; k < padded; ++k) {
-        // The padding repeats the last triangle: finite values the wide tests may read.
-        const std::size_t at = std::min(k, count - 1);
+    for (std::size_t k = 0; k < count; ++k) {
         TriangleVertices tri;
-        mesh.triangle(triangles[at], tri, s.activeEdges[at]);
+        mesh.triangle(triangles[k], tri, s.activeEdges[k]);
         for (int v = 0; v < 3; ++v) {
             s.triangles[3 * v][k] = tri[v].x;
             s.triangles[3 * v + 1][k] = tri[v].y;
             s.triangles[3 * v + 2][k] = tri[v].z;
         }
     }
+    // The padding repeats the last triangle: finite values the wide tests may read.
+    for (std::vector<float>& lane : s.triangles)
+        std::fill(lane.begin() + count, lane.begin() + padded, lane[count - 1]);
     const TriangleLanes lanes{{s.triangles[0].data(), s.triangles[3].data(), s.triangles[6].data()},
                               {s.triangles[1].data(), s.triangles[4].data(), s.triangles[7].data()},
                               {s.triangles[2].data(), s.triangles[5].data(), s.triangles[8].data()}};
