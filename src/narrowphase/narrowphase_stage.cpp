@@ -304,13 +304,6 @@ void collideTriangles(const NarrowPhaseStage::Job& job, const std::uint32_t* tri
     }
 }
 
-/// A manifold's normal, count and used points (the unused point slots are never read).
-void copyManifold(const Manifold& from, Manifold& to) {
-    to.normal = from.normal;
-    to.pointCount = from.pointCount;
-    for (int k = 0; k < from.pointCount; ++k) to.points[k] = from.points[k];
-}
-
 /// The pair's margin for this step (see NarrowPhaseStage::run): the fixed margin plus how far the two surfaces can
 /// close in dt. Written once for both lane types so that batched and one-at-a-time pairs get the same margins.
 template <class F>
@@ -708,12 +701,12 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             for (std::size_t j = 0; j < chunk.jobs.size() && chunk.jobs[j].triangles == 0; ++j) {
                 if (chunk.manifolds[j].pointCount == 0) continue;
                 out.pairs[o] = chunk.jobs[j].pair;
-                copyManifold(chunk.manifolds[j], out.manifolds[o]);
+                out.manifolds[o] = chunk.manifolds[j];
                 ++o;
             }
             for (std::size_t k = 0; k < chunk.meshPairs.size(); ++k, ++o) {
                 out.pairs[o] = chunk.meshPairs[k];
-                copyManifold(chunk.meshManifolds[k], out.manifolds[o]);
+                out.manifolds[o] = chunk.meshManifolds[k];
             }
         }
     });
