@@ -403,76 +403,96 @@ int capsuleFaceContact(const HullView& H, int f, Vec3 p0, Vec3 p1, float radius,
     return count;
 }
 
-/// Exact distance between segment seg (swept by radius) and the box of half extents h, both in the box frame, as
-/// the best of all candidate separating axes of the two cores: the box faces, segment x box axes, box vertex to its
-/// closest segment point, and segment end to its closest box point. Those are the normals of every face, edge and
-/// vertex of the Minkowski difference, so when the cores are apart the best axis is the direction of the closest
-/// points and its separation is the distance. Same result layout as GJK (normal from the capsule to the box).
+/// Exact distance between segment seg (swept by radius) and the box of half extents h, both in the box frame, in
+/// closed form. The squared distance of the segment point s(t) = seg0 + t d from the box is the sum over the axes of
+/// the squared excess of |s_i(t)| over h_i: convex, piecewise quadratic in t, continuously differentiable, with a
+/// break where s(t) crosses a face plane (at most six). Its derivative is therefore monotone and piecewise linear:
+/// the interval where it changes sign is found by walking the sorted breaks, and on that interval (a fixed set of
+/// axes in excess) the minimum is one division. The closest points are s(t) and s(t) clamped to the box. The face
+/// axes, tested first, give the common early exit (a lower bound on the distance). Same result layout as GJK
+/// (normal from the capsule to the box); cores closer than 1e-6 count as overlapping.
 GjkResult segmentBoxDistance(const Vec3 seg[2], float radius, Vec3 h, float margin) {
     const Vec3 d = seg[1] - seg[0];
-    const float dd = dot(d, d);
-    const float eps = 1e-6f * (length(h) + std::sqrt(dd));
     GjkResult r;
-    float best = -INFINITY;
-    Vec3 bestAxis{0, 1, 0}, bestSeg = seg[0];
-    int bestEdge = -1;  // a segment x box-axis winner finds its closest points after the search
-    auto consider = [&](Vec3 axis, Vec3 pSeg, int edge) {  // unit axis from the box to the segment
-        const float lo = minf(dot(axis, seg[0]), dot(axis, seg[1]));
-        const float sep = lo - (h.x * std::fabs(axis.x) + h.y * std::fabs(axis.y) + h.z * std::fabs(axis.z));
-        if (sep > best) best = sep, bestAxis = axis, bestSeg = pSeg, bestEdge = edge;
-    };
+    // Face axes: the larger gap of the two ends' lower bound beyond each face.
+    float faceGap = -INFINITY;
     for (int k = 0; k < 3; ++k) {
-        Vec3 axis{};
-        (&axis.x)[k] = 1;
-        const bool firstLow = (&seg[0].x)[k] <= (&seg[1].x)[k];
-        consider(axis, seg[firstLow ? 0 : 1], -1);
-        consider(-axis, seg[firstLow ? 1 : 0], -1);
+        const float a = (&seg[0].x)[k], b = (&seg[1].x)[k], hk = (&h.x)[k];
+        faceGap = maxf(faceGap, maxf(minf(a, b) - hk, -maxf(a, b) - hk));
     }
-    if (best - radius > margin) {  // a face axis already separates beyond the margin: the common early exit
+    if (faceGap - radius > margin) {  // a face axis already separates beyond the margin: the common early exit
         r.status = GjkStatus::Separated;
-        r.distance = best - radius;
+        r.distance = faceGap - radius;
         return r;
     }
-    for (int k = 0; k < 3; ++k) {
-        Vec3 axis{};
-        (&axis.x)[k] = 1;
-        const Vec3 c = cross(d, axis);
-        const float len = length(c);
-        if (len > eps * std::sqrt(dd) && len > kBoxEdgeParallelEpsilon * std::sqrt(dd))
-            consider(c * ((dot(c, seg[0]) < 0 ? -1.0f : 1.0f) / len), seg[0], k);
+    const float s0[3] = {seg[0].x, seg[0].y, seg[0].z}, dv[3] = {d.x, d.y, d.z}, hv[3] = {h.x, h.y, h.z};
+    // Half the derivative of the squared distance at t: sum over the axes of excess * d_i.
+    auto slope = [&](float t) {
+        float sum = 0;
+        for (int k = 0; k < 3; ++k) {
+            const float x = s0[k] + t * dv[k];
+            sum += (x - maxf(-hv[k], minf(x, hv[k]))) * dv[k];
+        }
+        return sum;
+    };
+    float t = 0;
+    if (dot(d, d) > 0 && slope(0) < 0) {
+        if (slope(1) <= 0) {
+            t = 1;
+        } else {
+            float breaks[6];
+            int count = 0;
+            for (int k = 0; k < 3; ++k) {
+                if (dv[k] == 0) continue;
+                const float inv = 1.0f / dv[k];
+                for (const float plane : {hv[k], -hv[k]}) {
+                    const float b = (plane - s0[k]) * inv;
+                    if (!(b > 0 && b < 1)) continue;
+                    int i = count++;  // insertion keeps them sorted (at most six)
+                    for (; i > 0 && breaks[i - 1] > b; --i) breaks[i] = breaks[i - 1];
+                    breaks[i] = b;
+                }
+            }
+            float lo = 0, hi = 1;
+            for (int i = 0; i < count; ++i) {
+                if (slope(breaks[i]) >= 0) {
+                    hi = breaks[i];
+                    break;
+                }
+                lo = breaks[i];
+            }
+            // On (lo, hi) the axes in excess are fixed: those of its midpoint. The slope there is
+            // sum (s0_i + t d_i - side_i h_i) d_i, zero at t = sum (side_i h_i - s0_i) d_i / sum d_i^2.
+            const float mid = 0.5f * (lo + hi);
+            float num = 0, den = 0;
+            for (int k = 0; k < 3; ++k) {
+                const float x = s0[k] + mid * dv[k];
+                if (x > hv[k] || x < -hv[k]) {
+                    num += ((x > 0 ? hv[k] : -hv[k]) - s0[k]) * dv[k];
+                    den += dv[k] * dv[k];
+                }
+            }
+            t = den > 0 ? maxf(lo, minf(num / den, hi)) : lo;
+        }
     }
-    for (int i = 0; i < 8; ++i) {
-        const Vec3 v{i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z};
-        const float t = dd > 0 ? clamp01(dot(v - seg[0], d) / dd) : 0.0f;
-        const Vec3 q = seg[0] + d * t, a = q - v;
-        const float len = length(a);
-        if (len > eps) consider(a * (1.0f / len), q, -1);
-    }
-    for (int e = 0; e < 2; ++e) {
-        const Vec3 p = seg[e];
-        const Vec3 q{maxf(-h.x, minf(p.x, h.x)), maxf(-h.y, minf(p.y, h.y)), maxf(-h.z, minf(p.z, h.z))};
-        const Vec3 a = p - q;
-        const float len = length(a);
-        if (len > eps) consider(a * (1.0f / len), p, -1);
-    }
-    if (best <= 1e-6f) return r;  // cores overlap (or touch): no exact distance from the axes
-    if (bestEdge >= 0) {
-        // Closest points of the segment and the box edge along axis k that supports the axis.
-        const int k = bestEdge;
-        const Vec3 n = bestAxis;
-        Vec3 corner{h.x * (n.x < 0 ? -1.0f : 1.0f), h.y * (n.y < 0 ? -1.0f : 1.0f), h.z * (n.z < 0 ? -1.0f : 1.0f)};
-        (&corner.x)[k] = -(&h.x)[k];
-        Vec3 edge{};
-        (&edge.x)[k] = 2 * (&h.x)[k];
-        float s, w;
-        closestSegmentPoints(seg[0], d, corner, edge, s, w);
-        bestSeg = seg[0] + d * s;
-    }
-    r.status = best > radius ? GjkStatus::Separated : GjkStatus::RadiiOverlap;
-    r.distance = best - radius;
-    r.normal = -bestAxis;
-    r.pointA = bestSeg - bestAxis * radius;
-    r.pointB = bestSeg - bestAxis * best;
+    const Vec3 p = seg[0] + d * t;
+    const Vec3 q{maxf(-h.x, minf(p.x, h.x)), maxf(-h.y, minf(p.y, h.y)), maxf(-h.z, minf(p.z, h.z))};
+    const Vec3 a = p - q;  // from the box to the segment
+    // Over a face (one axis in excess) the distance is that excess exactly, as the face axis gives it.
+    const int excess = (a.x != 0) + (a.y != 0) + (a.z != 0);
+    const float dist = excess == 1 ? std::fabs(a.x + a.y + a.z) : length(a);
+    // Cores that overlap or touch (within the rounding of a surface point at this scale) have no usable direction:
+    // the caller's SAT decides.
+    if (!(dist > 1e-6f * maxf(1.0f, length(h) + length(d)))) return r;
+    const Vec3 axis = excess == 1
+                          ? Vec3{a.x > 0 ? 1.0f : (a.x < 0 ? -1.0f : 0.0f), a.y > 0 ? 1.0f : (a.y < 0 ? -1.0f : 0.0f),
+                                 a.z > 0 ? 1.0f : (a.z < 0 ? -1.0f : 0.0f)}
+                          : a * (1.0f / dist);
+    r.status = dist > radius ? GjkStatus::Separated : GjkStatus::RadiiOverlap;
+    r.distance = dist - radius;
+    r.normal = -axis;
+    r.pointA = p - axis * radius;
+    r.pointB = q;
     return r;
 }
 
@@ -656,6 +676,20 @@ bool collideBoxHull(const Transform& box, Vec3 half, const ConvexHull& hull, con
 }
 
 bool collideCapsuleBox(const CapsuleSegment& capsule, const Transform& box, Vec3 half, float margin, Manifold& out) {
+    // Most candidate pairs are apart along a box face axis: that test first, before the box is made a hull view.
+    // (segmentBoxDistance repeats it, so the pairs that pass get the same answer as ever.)
+    const Quat qInv = conjugate(box.rotation);
+    const Vec3 c = rotate(qInv, capsule.center - box.position), h = rotate(qInv, capsule.halfAxis);
+    const Vec3 seg0 = c - h, seg1 = c + h;
+    float faceGap = -INFINITY;
+    for (int k = 0; k < 3; ++k) {
+        const float a = (&seg0.x)[k], b = (&seg1.x)[k], hk = (&half.x)[k];
+        faceGap = maxf(faceGap, maxf(minf(a, b) - hk, -maxf(a, b) - hk));
+    }
+    if (faceGap - capsule.radius > margin) {
+        out.pointCount = 0;
+        return false;
+    }
     Vec3 vertices[8];
     float offsets[6];
     return collideCapsulePolytope(capsule, boxView(half, vertices, offsets), box, margin, out, &half);

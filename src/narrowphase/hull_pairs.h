@@ -25,12 +25,14 @@
 //   the larger hull's largest vertex distance from its centroid). A resting hull keeps its reference face.
 //
 // Capsules (segment core + radius) against a box or hull: first the exact distance between the cores. For a hull
-// that is GJK (gjk.h). For a box it is closed form: the best of all candidate axes of segment and box -- the box
-// faces, segment x box axes, each box vertex to its closest segment point, each segment end to its closest box
-// point. Those are the normals of every face, edge and vertex of their Minkowski difference, so the best axis is
-// exact when the cores are apart; a face axis beyond the margin exits early. (Measured on one core, random pairs:
-// 1.9 M/s with GJK, 9.0 M/s with the candidate axes; GJK costs about 0.45 us a call.) When the cores are apart (the
-// common case: a resting capsule touches with its radius only) that direction is the manifold normal. If it lies
+// that is GJK (gjk.h). For a box it is closed form: the squared distance of the segment point s(t) from the box is a
+// convex, continuously differentiable, piecewise quadratic function of t (a piece between each two crossings of a face
+// plane), so its minimum is found by walking the at most six crossings to where the slope changes sign and solving
+// one linear equation there; a face axis beyond the margin exits early. (Measured on one core, random pairs: 1.9 M/s
+// with GJK, 9.0 M/s with the earlier best-of-candidate-axes form -- box faces, segment x box axes, vertex and end
+// point directions, about 20 square roots -- 17 M/s closed form.) When the cores are apart (the
+// common case: a resting capsule touches with its radius only) the direction of the closest points is the manifold
+// normal. If it lies
 // within kCapsuleFaceAlignCos of a face normal of the polytope, the segment is clipped against that face's side
 // planes and each surviving end whose depth (from the face plane) is within the margin becomes a point (a capsule
 // lying flat gives 2 points, standing on end 1) -- unless the clipped ends are shallower than the exact depth

@@ -10,6 +10,7 @@
 #include "narrowphase/convex_pairs.h"
 #include "narrowphase/hull_pairs.h"
 #include "narrowphase/triangle_pairs.h"
+#include "narrowphase/triangle_reach.h"
 #include "parallel.h"
 #include "shapes/mesh_adjacency.h"
 #include "simd/simd.h"
@@ -53,6 +54,13 @@ struct NarrowPhaseStage::Scratch {
     alignas(64) float out[11][kBlock];
     alignas(64) std::uint32_t feature[2][kBlock];
     alignas(64) std::int32_t count[kBlock];
+    /// A body's run of triangle jobs: world vertices (SoA, x y z of vertex 0, 1, 2), active edges and the reach
+    /// tests' verdicts, padded to whole SIMD batches; grown, never shrunk.
+    std::vector<float> triangles[9];
+    std::vector<std::uint8_t> activeEdges;
+    std::unique_ptr<bool[]> inReach;
+    std::size_t inReachCapacity = 0;
+    std::vector<BoxTriangleAxis> boxAxes;  ///< a box's SAT per triangle
 };
 
 namespace {
@@ -62,7 +70,10 @@ struct Posed {
     const Shape* shape;
 };
 
-Posed posed(const BodyStorage& storage, const std::vector<Shape>& shapes, std::uint32_t i, bool isStatic) {
+// Always inlined, as posedSide: returned through memory, the pose is written in pieces and read back whole, which
+// stalls on store forwarding in the per-pair loop.
+[[gnu::always_inline]] inline Posed posed(const BodyStorage& storage, const std::vector<Shape>& shapes, std::uint32_t i,
+                                          bool isStatic) {
     if (isStatic) {
         const StaticBodies& s = storage.statics;
         return {{{s.px[i], s.py[i], s.pz[i]}, {s.qx[i], s.qy[i], s.qz[i], s.qw[i]}}, &shapes[s.shape[i]]};
@@ -74,7 +85,8 @@ Posed posed(const BodyStorage& storage, const std::vector<Shape>& shapes, std::u
 }
 
 /// A side of a contact pair: the body's shape, or the compound child the pair names, posed in the world.
-Posed posedSide(const BodyStorage& storage, const std::vector<Shape>& shapes, const ContactPair& p, bool sideB) {
+[[gnu::always_inline]] inline Posed posedSide(const BodyStorage& storage, const std::vector<Shape>& shapes,
+                                              const ContactPair& p, bool sideB) {
     Posed body = sideB ? posed(storage, shapes, p.b, p.bStatic) : posed(storage, shapes, p.a, p.aStatic);
     const std::uint16_t child = sideB ? p.childB : p.childA;
     if (child == kNoChild) return body;
@@ -139,7 +151,7 @@ void collideBoxCapsule(const Posed& box, const Posed& capsule, float margin, Man
     out.normal = -out.normal;
 }
 
-/// One pair through its scalar kernel (not the triangle kernels: collideTriangle).
+/// One pair through its scalar kernel (not the triangle kernels: collideTriangles).
 template <class HullMap>
 void collide(PairKernel kernel, const Posed& a, const Posed& b, float margin, const HullMap& hulls, Manifold& out) {
     auto adjacency = [&](const Posed& p) -> const HullAdjacency& { return *hulls.at(p.shape->hull.get()).adjacency; };
@@ -182,34 +194,113 @@ void collide(PairKernel kernel, const Posed& a, const Posed& b, float margin, co
         case PairKernel::BoxTriangle:
         case PairKernel::HullTriangle:
         case PairKernel::Count:
-            break;  // triangles: collideTriangle
+            break;  // triangles: collideTriangles
     }
 }
 
-/// Body A against triangle t of the mesh `mesh` (prepared for A).
+/// Body A against the triangles of a run job (against the mesh `mesh`, prepared for A): the vertices of all of them
+/// are fetched first, the reach tests (triangle_reach.h) run over them in SIMD lanes, and the exact kernel only sees
+/// the triangles they leave. Touching triangles are appended to the chunk's mesh manifolds.
 template <class HullMap>
-void collideTriangle(PairKernel kernel, const Posed& a, const MeshSide& mesh, std::uint32_t t, float margin,
-                     const HullMap& hulls, Manifold& out) {
-    out.pointCount = 0;
-    TriangleVertices tri;
-    std::uint8_t active = 0;
-    mesh.triangle(t, tri, active);
-    switch (kernel) {
+void collideTriangles(const NarrowPhaseStage::Job& job, const std::uint32_t* triangles, const Posed& a,
+                      const MeshSide& mesh, float margin, const HullMap& hulls, NarrowPhaseStage::Chunk& chunk,
+                      NarrowPhaseStage::Scratch& s) {
+    const std::size_t count = job.triangles, padded = triangleLanesPadded(count);
+    for (std::vector<float>& lane : s.triangles)
+        if (lane.size() < padded) lane.resize(padded);
+    if (s.activeEdges.size() < count) s.activeEdges.resize(count);
+    if (s.inReachCapacity < padded) {
+        s.inReach = std::make_unique<bool[]>(padded);
+        s.inReachCapacity = padded;
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+        TriangleVertices tri;
+        mesh.triangle(triangles[k], tri, s.activeEdges[k]);
+        for (int v = 0; v < 3; ++v) {
+            s.triangles[3 * v][k] = tri[v].x;
+            s.triangles[3 * v + 1][k] = tri[v].y;
+            s.triangles[3 * v + 2][k] = tri[v].z;
+        }
+    }
+    // The padding repeats the last triangle: finite values the wide tests may read.
+    for (std::vector<float>& lane : s.triangles)
+        std::fill(lane.begin() + count, lane.begin() + padded, lane[count - 1]);
+    const TriangleLanes lanes{{s.triangles[0].data(), s.triangles[3].data(), s.triangles[6].data()},
+                              {s.triangles[1].data(), s.triangles[4].data(), s.triangles[7].data()},
+                              {s.triangles[2].data(), s.triangles[5].data(), s.triangles[8].data()}};
+    bool* inReach = s.inReach.get();
+    switch (job.kernel) {
         case PairKernel::SphereTriangle:
-            collideSphereTriangle(a.pose.position, a.shape->radius, tri, active, margin, out);
+            sphereTrianglesInReach(a.pose.position, a.shape->radius, margin, lanes, count, inReach);
             break;
         case PairKernel::CapsuleTriangle:
-            collideCapsuleTriangle(mesh.capsule, tri, active, margin, out);
+            capsuleTrianglesInReach(mesh.capsule, margin, lanes, count, inReach);
             break;
         case PairKernel::BoxTriangle:
-            collideBoxTriangle(mesh.box, tri, active, margin, out);
-            break;
-        case PairKernel::HullTriangle:
-            collideHullTriangle(*a.shape->hull, *hulls.at(a.shape->hull.get()).adjacency, a.pose, tri, active, margin,
-                                out);
+            // The box kernel's whole SAT runs in lanes (most of the triangles a box reaches touch it).
+            if (s.boxAxes.size() < padded) s.boxAxes.resize(padded);
+            boxTriangleAxes(mesh.box, margin, lanes, count, s.boxAxes.data());
+            for (std::size_t k = 0; k < count; ++k) inReach[k] = s.boxAxes[k].kind >= 0;
             break;
         default:
+            std::fill(inReach, inReach + count, true);  // hulls: no reach test, every triangle to the kernel
             break;
+    }
+    Manifold out;
+    for (std::size_t k = 0; k < count; ++k) {
+        if (!inReach[k]) continue;
+        TriangleVertices tri;
+        for (int v = 0; v < 3; ++v)
+            tri[v] = {s.triangles[3 * v][k], s.triangles[3 * v + 1][k], s.triangles[3 * v + 2][k]};
+        const std::uint8_t active = s.activeEdges[k];
+        out.pointCount = 0;
+        switch (job.kernel) {
+            case PairKernel::SphereTriangle:
+                collideSphereTriangle(a.pose.position, a.shape->radius, tri, active, margin, out);
+                break;
+            case PairKernel::CapsuleTriangle:
+                collideCapsuleTriangle(mesh.capsule, tri, active, margin, out, /*inReach=*/true);
+                break;
+            case PairKernel::BoxTriangle:
+                collideBoxTriangle(mesh.box, tri, active, margin, s.boxAxes[k], out);
+                break;
+            case PairKernel::HullTriangle:
+                collideHullTriangle(*a.shape->hull, *hulls.at(a.shape->hull.get()).adjacency, a.pose, tri, active,
+                                    margin, out);
+                break;
+            default:
+                break;
+        }
+        if (out.pointCount == 0) continue;
+        ContactPair pair = job.pair;
+        pair.triangle = triangles[k];
+        chunk.meshPairs.push_back(pair);
+        chunk.meshManifolds.push_back(out);
+    }
+}
+
+/// Memory of the triangle runs after job j while job j runs (its kernels take microseconds): the vertices of job
+/// j + 1's triangles, whose indices the previous call fetched, and the indices of job j + 2's. Terrain is read in no
+/// particular order, so these are mostly cache misses otherwise. Only for the same mesh as job j (the usual case).
+/// Always inlined: GCC judges a function that only prefetches free of effects and may delete calls to it.
+[[gnu::always_inline]] inline void prefetchTriangles(const NarrowPhaseStage::Chunk& chunk, std::size_t j,
+                                                     const std::vector<std::uint32_t>& meshTriangles,
+                                                     const MeshSide& mesh) {
+    if (mesh.mesh == nullptr) return;
+    const std::uint32_t* indices = mesh.mesh->indices.data();
+    const Vec3* vertices = mesh.mesh->vertices.data();
+    const ContactPair& pair = chunk.jobs[j].pair;
+    for (std::size_t ahead = 1; ahead <= 2 && j + ahead < chunk.jobs.size(); ++ahead) {
+        const NarrowPhaseStage::Job& next = chunk.jobs[j + ahead];
+        if (next.triangles == 0 || next.pair.b != pair.b || !next.pair.bStatic) return;
+        for (std::uint32_t k = 0; k < next.triangles; ++k) {
+            const std::uint32_t* triangle = indices + 3 * std::size_t(meshTriangles[next.firstTriangle + k]);
+            if (ahead == 2) {
+                __builtin_prefetch(triangle);
+                continue;
+            }
+            for (int v = 0; v < 3; ++v) __builtin_prefetch(vertices + triangle[v]);
+        }
     }
 }
 
@@ -514,8 +605,11 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
         chunk.jobs.clear();
         // A is the body whose shape kind is lower, so each kernel sees its shapes in its own argument order.
         // Compounds expand into one job per child (per child pair for two compounds), in child order.
+        // `run`: for a body against a mesh, the index of its triangle in meshTriangles (a run of one); else ~0u.
         auto addJob = [&](std::uint32_t first, bool firstStatic, std::uint32_t second, bool secondStatic,
-                          std::uint32_t triangle) {
+                          std::uint32_t run) {
+            const std::uint32_t triangle = run == ~0u ? ~0u : candidates.meshTriangles[run];
+            const std::uint32_t runLength = run == ~0u ? 0u : 1u, runStart = run == ~0u ? 0u : run;
             const std::uint32_t shape1 = firstStatic ? storage.statics.shape[first] : storage.moving.shape[first];
             const std::uint32_t shape2 = secondStatic ? storage.statics.shape[second] : storage.moving.shape[second];
             const ShapeKind kind1 = tables_.kind[shape1], kind2 = tables_.kind[shape2];
@@ -528,6 +622,7 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
                     job.pair = {first, second, firstStatic, secondStatic, triangle, kNoChild, kNoChild};
                     job.kernel = kernels_[static_cast<int>(kind1)][static_cast<int>(kind2)];
                 }
+                job.firstTriangle = runStart, job.triangles = runLength;
                 chunk.jobs.push_back(job);
                 return;
             }
@@ -549,6 +644,7 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
                         job.pair = {first, second, firstStatic, secondStatic, triangle, child1, child2};
                         job.kernel = pairKernel(k1, k2);
                     }
+                    job.firstTriangle = runStart, job.triangles = runLength;
                     chunk.jobs.push_back(job);
                 }
         };
@@ -558,8 +654,9 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             const BodyPair& p = candidates.statics[u - movingCount];
             addJob(p.a, false, p.b, true, ~0u);
         }
-        // A body against a mesh: one job per triangle (the mesh is always B). Mesh pairs hold consecutive runs of
-        // meshTriangles, so the pair of the chunk's first triangle is found once and then followed.
+        // A body against a mesh (always B): one job per run of its triangles in the chunk. Mesh pairs hold
+        // consecutive runs of meshTriangles, so the pair of the chunk's first triangle is found once and then
+        // followed.
         if (end > movingCount + staticCount) {
             const auto first =
                 static_cast<std::uint32_t>(std::max(begin, movingCount + staticCount) - movingCount - staticCount);
@@ -570,23 +667,19 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             for (auto t = first; t < last; ++mesh) {
                 const std::uint32_t runEnd = std::min(last, mesh->firstTriangle + mesh->triangleCount);
                 if (t >= runEnd) continue;
-                // The body's job for its first triangle here stands for the rest of its run (a compound body makes
+                // The body's job for its first triangle here grows to the rest of its run (a compound body makes
                 // one job per child and triangle, in that order, so it goes through addJob for every triangle).
                 const std::size_t at = chunk.jobs.size();
-                addJob(mesh->moving, false, mesh->staticBody, true, candidates.meshTriangles[t]);
+                addJob(mesh->moving, false, mesh->staticBody, true, t);
                 if (chunk.jobs.size() != at + 1 || chunk.jobs[at].pair.childA != kNoChild) {
-                    for (++t; t < runEnd; ++t)
-                        addJob(mesh->moving, false, mesh->staticBody, true, candidates.meshTriangles[t]);
+                    for (++t; t < runEnd; ++t) addJob(mesh->moving, false, mesh->staticBody, true, t);
                     continue;
                 }
-                Job job = chunk.jobs[at];
-                for (++t; t < runEnd; ++t) {
-                    job.pair.triangle = candidates.meshTriangles[t];
-                    chunk.jobs.push_back(job);
-                }
+                chunk.jobs[at].triangles = runEnd - t;
+                t = runEnd;
             }
         }
-        runChunk(chunk, *scratch_[static_cast<std::size_t>(worker)], storage, shapes, params);
+        runChunk(chunk, *scratch_[static_cast<std::size_t>(worker)], storage, shapes, candidates.meshTriangles, params);
     });
 
     // Each chunk's touching jobs go to the output at the offset its predecessors leave: canonical order on any
@@ -605,28 +698,32 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
         for (std::size_t c = begin; c < end; ++c) {
             const Chunk& chunk = chunks_[c];
             std::size_t o = chunk.offset;
-            for (std::size_t j = 0; j < chunk.jobs.size(); ++j) {
+            for (std::size_t j = 0; j < chunk.jobs.size() && chunk.jobs[j].triangles == 0; ++j) {
                 if (chunk.manifolds[j].pointCount == 0) continue;
                 out.pairs[o] = chunk.jobs[j].pair;
                 out.manifolds[o] = chunk.manifolds[j];
                 ++o;
+            }
+            for (std::size_t k = 0; k < chunk.meshPairs.size(); ++k, ++o) {
+                out.pairs[o] = chunk.meshPairs[k];
+                out.manifolds[o] = chunk.meshManifolds[k];
             }
         }
     });
 }
 
 void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorage& storage,
-                                const std::vector<Shape>& shapes, const NarrowPhaseParams& params) const {
+                                const std::vector<Shape>& shapes, const std::vector<std::uint32_t>& meshTriangles,
+                                const NarrowPhaseParams& params) const {
     const std::size_t n = chunk.jobs.size();
     if (chunk.manifolds.size() < n) chunk.manifolds.resize(n);
+    chunk.meshPairs.clear();
+    chunk.meshManifolds.clear();
     for (auto& list : scratch.batched) list.clear();
     // Pairs with a batched kernel are collected for it; every other pair runs here, one at a time, with its own
-    // speculative margin. A body on a mesh is one job per triangle, all in a row: their poses and margin are
-    // worked out once.
-    const ContactPair* last = nullptr;
-    Posed a{}, b{};
+    // speculative margin. A body on a mesh is one job per triangle, all in a row: they run together
+    // (collideTriangles), their poses and margin worked out once.
     MeshSide mesh;
-    float margin = 0;
     for (std::uint32_t j = 0; j < n; ++j) {
         const Job& job = chunk.jobs[j];
         Batched batched = Batched::Count;
@@ -654,34 +751,36 @@ void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorag
             continue;
         }
         const ContactPair& p = job.pair;
-        if (last == nullptr || p.a != last->a || p.b != last->b || p.aStatic != last->aStatic ||
-            p.bStatic != last->bStatic || p.childA != last->childA || p.childB != last->childB) {
-            const Motion<float> motionA = motionOf(storage, tables_, p, false);
-            const Motion<float> motionB = motionOf(storage, tables_, p, true);
-            margin = speculativeMargin<float>(params, motionA.v, motionA.w, motionA.reach, motionB.v, motionB.w,
-                                              motionB.reach);
-            a = posedSide(storage, shapes, p, false);
-            b = posedSide(storage, shapes, p, true);
-            if (p.triangle != ~0u) mesh.prepare(a, b);
-            last = &p;
-        }
-        if (p.triangle != ~0u)
-            collideTriangle(job.kernel, a, mesh, p.triangle, margin, hullAdjacency_, chunk.manifolds[j]);
-        else
+        const Motion<float> motionA = motionOf(storage, tables_, p, false);
+        const Motion<float> motionB = motionOf(storage, tables_, p, true);
+        const float margin =
+            speculativeMargin<float>(params, motionA.v, motionA.w, motionA.reach, motionB.v, motionB.w, motionB.reach);
+        const Posed a = posedSide(storage, shapes, p, false);
+        const Posed b = posedSide(storage, shapes, p, true);
+        if (job.triangles == 0) {
             collide(job.kernel, a, b, margin, hullAdjacency_, chunk.manifolds[j]);
+            continue;
+        }
+        mesh.prepare(a, b);
+        prefetchTriangles(chunk, j, meshTriangles, mesh);
+        collideTriangles(job, meshTriangles.data() + job.firstTriangle, a, mesh, margin, hullAdjacency_, chunk,
+                         scratch);
     }
     for (int kernel = 0; kernel < static_cast<int>(Batched::Count); ++kernel)
         if (!scratch.batched[kernel].empty())
             collideBatched(static_cast<Batched>(kernel), scratch.batched[kernel], chunk, scratch, storage, shapes,
                            tables_, params);
 
-    chunk.touching = 0;
-    chunk.points = 0;
-    for (std::size_t j = 0; j < n; ++j) {
+    // Counted in locals: the compiler cannot keep the chunk's fields in registers across the loop.
+    std::uint32_t touching = static_cast<std::uint32_t>(chunk.meshManifolds.size()), points = 0;
+    for (std::size_t j = 0; j < n && chunk.jobs[j].triangles == 0; ++j) {
         const int count = chunk.manifolds[j].pointCount;
-        chunk.touching += count > 0 ? 1u : 0u;
-        chunk.points += static_cast<std::uint32_t>(count);
+        touching += count > 0 ? 1u : 0u;
+        points += static_cast<std::uint32_t>(count);
     }
+    for (const Manifold& m : chunk.meshManifolds) points += static_cast<std::uint32_t>(m.pointCount);
+    chunk.touching = touching;
+    chunk.points = points;
 }
 
 }  // namespace rubble::detail

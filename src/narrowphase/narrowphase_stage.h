@@ -113,22 +113,28 @@ public:
     struct Job {
         ContactPair pair;
         PairKernel kernel = PairKernel::Count;  // always set when the job is made
+        /// A body against a mesh: the job stands for the triangles CandidatePairs::meshTriangles[firstTriangle,
+        /// firstTriangle + triangles) (pair.triangle is the first). 0 triangles: a pair of bodies.
+        std::uint32_t firstTriangle = 0, triangles = 0;
     };
-    /// One parallel chunk of the candidates (fixed boundaries, in canonical order): its jobs and one manifold per
-    /// job, kept from step to step so that a step allocates nothing once sizes settle.
+    /// One parallel chunk of the candidates (fixed boundaries, in canonical order), kept from step to step so that a
+    /// step allocates nothing once sizes settle. Its jobs are the pairs of bodies, then the runs of triangles (the
+    /// candidates' order); the pairs of bodies get one manifold per job, the triangles only their touching ones.
     struct Chunk {
         std::vector<Job> jobs;
-        std::vector<Manifold> manifolds;
-        std::uint32_t touching = 0;  ///< jobs with at least one point
+        std::vector<Manifold> manifolds;     ///< per job that is a pair of bodies (slots of triangle jobs unused)
+        std::vector<ContactPair> meshPairs;  ///< the touching triangles of the runs, in order
+        std::vector<Manifold> meshManifolds;
+        std::uint32_t touching = 0;  ///< manifolds with at least one point
         std::uint32_t points = 0;
-        std::size_t offset = 0;  ///< where its touching jobs go in the output
+        std::size_t offset = 0;  ///< where its touching manifolds go in the output
     };
     struct Scratch;
 
 private:
     void prepareShapes(const std::vector<Shape>& shapes);
     void runChunk(Chunk& chunk, Scratch& scratch, const BodyStorage& storage, const std::vector<Shape>& shapes,
-                  const NarrowPhaseParams& params) const;
+                  const std::vector<std::uint32_t>& meshTriangles, const NarrowPhaseParams& params) const;
 
     std::vector<Chunk> chunks_;
     /// Per worker: index lists and SoA lanes of the batched kernels.

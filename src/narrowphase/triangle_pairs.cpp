@@ -3,11 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <vector>
 
 #include "narrowphase/clip.h"
 #include "narrowphase/hull_pairs.h"
 #include "shapes/shape.h"
+#include "simd/simd.h"
+#include "simd/vec.h"
 
 namespace rubble::detail {
 namespace {
@@ -283,7 +286,7 @@ int collideSphereTriangle(Vec3 center, float radius, const TriangleVertices& tri
 // ---- Capsule ----------------------------------------------------------------------------------------------------
 
 int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices& tri, std::uint8_t activeEdges,
-                           float margin, Manifold& out) {
+                           float margin, Manifold& out, bool inReach) {
     out.pointCount = 0;
     const Vec3 origin = tri[0];
     const Vec3 v[3] = {{}, tri[1] - origin, tri[2] - origin};
@@ -295,8 +298,10 @@ int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices
     if (!isFinite(s0) || !isFinite(axis)) return 0;
     const float reach = radius + margin;
     const float h0 = dot(faceN, s0), h1 = dot(faceN, s0 + axis);
-    if (beyondReach(h0, h1, reach, 1.0f)) return 0;
-    for (int e = 0; e < 3; ++e) {
+    // The quick rejections below only ever refuse what the exact test further down refuses too: a caller that has
+    // found the triangle in reach already skips them.
+    if (!inReach && beyondReach(h0, h1, reach, 1.0f)) return 0;
+    for (int e = 0; e < 3 && !inReach; ++e) {
         const Vec3 edge = v[e == 2 ? 0 : e + 1] - v[e], side = cross(edge, faceN);  // outward, |side| = |edge|
         const float f0 = dot(side, s0 - v[e]), f1 = dot(side, s0 + axis - v[e]);
         if (f0 > 0 && f1 > 0 && beyondReach(f0, f1, reach, dot(edge, edge))) return 0;
@@ -425,77 +430,229 @@ int collideBoxTriangle(const Transform& boxPose, Vec3 halfExtents, const Triangl
 
 namespace {
 
-/// num / sqrt(len2) > limit for len2 > 0, without the square root (edge axes are tested unnormalised and only the
-/// winner is normalised).
-[[gnu::always_inline]] inline bool exceeds(float num, float limit, float len2) {
-    return limit >= 0 ? num > 0 && num * num > limit * limit * len2 : num >= 0 || num * num < limit * limit * len2;
+/// The box-triangle SAT of collideBoxTriangle, written once over the lane type (simd/): one triangle per lane, world
+/// vertices in. Every lane runs every axis (a lane found apart stays apart); the float form exits as soon as its
+/// triangle is apart, the wide form when all its lanes are. Both round as each other (simd.h), so boxTriangleAxes and
+/// collideBoxTriangle make the same choice.
+template <class F>
+struct BoxSat {
+    simd::MaskOf<F> contact;   ///< finite, not degenerate, and no axis separates beyond the margin
+    F kind, boxAxis, triEdge;  ///< BoxTriangleAxis codes, as floats
+    simd::Vec3W<F> n;
+    simd::Vec3W<F> t[3];  ///< the triangle in the box frame
+    simd::Vec3W<F> faceN;
+};
+
+template <class F>
+simd::Vec3W<F> wide(Vec3 v) {
+    return simd::Vec3W<F>::broadcast(v.x, v.y, v.z);
 }
+
+template <class F>
+BoxSat<F> boxTriangleSat(const TriangleBox& box, const simd::Vec3W<F> (&tri)[3], float margin) {
+    using simd::andMask;
+    using simd::notMask;
+    using simd::orMask;
+    using simd::select;
+    using V = simd::Vec3W<F>;
+    const F zero(0.0f), one(1.0f);
+    BoxSat<F> r{simd::MaskOf<F>(false), zero, zero, zero, V::zero(), {}, V::zero()};
+    // Box frame, relative to the box centre (as toBox * (v - position)).
+    const V position = wide<F>(box.pose.position);
+    const V rows[3] = {wide<F>(box.toBox.rows[0]), wide<F>(box.toBox.rows[1]), wide<F>(box.toBox.rows[2])};
+    V t[3];
+    for (int k = 0; k < 3; ++k) {
+        const V d = tri[k] - position;
+        t[k] = {dot(rows[0], d), dot(rows[1], d), dot(rows[2], d)};
+    }
+    // faceNormal, lane-wise.
+    const V ab = t[1] - t[0], ac = t[2] - t[0], bc = ac - ab;
+    const V cr = cross(ab, ac);
+    const F longest = simd::max(simd::max(dot(ab, ab), dot(ac, ac)), dot(bc, bc));
+    const F n2 = dot(cr, cr);
+    simd::MaskOf<F> live =
+        andMask(n2 > F(kDegenerateAreaSq) * longest * longest, andMask(simd::isFinite(n2), simd::isFinite(longest)));
+    live = andMask(live, simd::isFinite(t[0]));
+    const V faceN = cr * (one / simd::sqrt(n2));
+    r.t[0] = t[0], r.t[1] = t[1], r.t[2] = t[2], r.faceN = faceN;
+    const Vec3 hs = box.halfExtents;
+    const V h = wide<F>(hs);
+    auto boxRadius = [&](const V& L) { return simd::abs(L.x) * h.x + simd::abs(L.y) * h.y + simd::abs(L.z) * h.z; };
+    // The triangle face on the side of the box centre (two-sided triangles), first: it separates most triangles.
+    const V toFace = select(dot(faceN, -t[0]) >= zero, -faceN, faceN);
+    F best = dot(toFace, t[0]) - boxRadius(toFace);
+    const F marginW(margin);
+    live = andMask(live, notMask(best > marginW));
+    if (simd::none(live)) return r;
+    const V edges[3] = {t[1] - t[0], t[2] - t[1], t[0] - t[2]};
+    const F size = simd::max(
+        simd::max(simd::max(h.x, h.y), h.z),
+        simd::sqrt(simd::max(simd::max(dot(edges[0], edges[0]), dot(edges[1], edges[1])), dot(edges[2], edges[2]))));
+    V n = toFace;
+    F kind = zero, boxAxis = zero, triEdge = zero;
+    auto threshold = [&] {
+        return best + F(kAxisRelativeTolerance) * simd::abs(best) + F(kAxisAbsoluteTolerance) * size;
+    };
+    const F hk[3] = {h.x, h.y, h.z};
+    for (int k = 0; k < 3; ++k) {
+        const F p0 = k == 0 ? t[0].x : (k == 1 ? t[0].y : t[0].z);
+        const F p1 = k == 0 ? t[1].x : (k == 1 ? t[1].y : t[1].z);
+        const F p2 = k == 0 ? t[2].x : (k == 1 ? t[2].y : t[2].z);
+        const F pos = simd::min(simd::min(p0, p1), p2) - hk[k], neg = -simd::max(simd::max(p0, p1), p2) - hk[k];
+        const F sep = simd::max(pos, neg);
+        live = andMask(live, notMask(sep > marginW));
+        if (simd::none(live)) return r;
+        const simd::MaskOf<F> take = sep > threshold();
+        const F sign = select(pos >= neg, one, -one);
+        const V axis{k == 0 ? sign : zero, k == 1 ? sign : zero, k == 2 ? sign : zero};
+        best = select(take, sep, best);
+        n = select(take, axis, n);
+        kind = select(take, one, kind);
+        boxAxis = select(take, F(float(k)), boxAxis);
+    }
+    // Of an edge axis only the direction in which triangle edge j is the triangle's support towards the box can be
+    // the contact's (see collideBoxTriangle); tested unnormalised, only a winner is normalised.
+    V sides[3];
+    for (int j = 0; j < 3; ++j) sides[j] = cross(edges[j], faceN);
+    const F parallel2(kTriangleEdgeParallelEpsilon * kTriangleEdgeParallelEpsilon);
+    // num / sqrt(len2) > limit without the square root (the scalar `exceeds`).
+    auto exceeds = [&](const F& num, const F& limit, const F& len2) {
+        const F lhs = num * num, rhs = limit * limit * len2;
+        if constexpr (std::is_same_v<F, float>)  // one triangle: branch (both forms give the same answer)
+            return limit >= 0 ? num > 0 && lhs > rhs : num >= 0 || lhs < rhs;
+        const simd::MaskOf<F> nonNegative = limit >= zero;
+        return orMask(andMask(nonNegative, andMask(num > zero, lhs > rhs)),
+                      andMask(notMask(nonNegative), orMask(num >= zero, lhs < rhs)));
+    };
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            const V e = edges[j];
+            const V L = i == 0 ? V{zero, -e.z, e.y} : (i == 1 ? V{e.z, zero, -e.x} : V{-e.y, e.x, zero});
+            const F len2 = dot(L, L);
+            const simd::MaskOf<F> tested = notMask(len2 <= parallel2 * dot(e, e));
+            const F p0 = dot(L, t[0]), p1 = dot(L, t[1]), p2 = dot(L, t[2]);
+            const F radius = boxRadius(L);
+            const F pos = simd::min(simd::min(p0, p1), p2) - radius, neg = -simd::max(simd::max(p0, p1), p2) - radius;
+            live = andMask(live, notMask(andMask(tested, exceeds(simd::max(pos, neg), marginW, len2))));
+            if (simd::none(live)) return r;
+            const F side = dot(L, sides[j]);
+            const F sepU = select(side < zero, pos, neg);
+            const simd::MaskOf<F> take =
+                andMask(andMask(tested, notMask(side == zero)), exceeds(sepU, threshold(), len2));
+            if (simd::none(take)) continue;  // the square root only for a lane whose axis wins
+            const F inv = one / simd::sqrt(len2);
+            best = select(take, sepU * inv, best);
+            n = select(take, select(side < zero, L, -L) * inv, n);
+            kind = select(take, F(2.0f), kind);
+            boxAxis = select(take, F(float(i)), boxAxis);
+            triEdge = select(take, F(float(j)), triEdge);
+        }
+    }
+    r.contact = live;
+    r.kind = kind, r.boxAxis = boxAxis, r.triEdge = triEdge, r.n = n;
+    return r;
+}
+
+BoxTriangleAxis axisOfLane(const BoxSat<float>& sat) {
+    BoxTriangleAxis axis;
+    if (!sat.contact) return axis;
+    axis.kind = static_cast<int>(sat.kind), axis.boxAxis = static_cast<int>(sat.boxAxis);
+    axis.triEdge = static_cast<int>(sat.triEdge), axis.n = {sat.n.x, sat.n.y, sat.n.z};
+    return axis;
+}
+
+template <class F>
+void boxTriangleAxesAt(const TriangleBox& box, float margin, const TriangleLanes& tris, std::size_t i,
+                       BoxTriangleAxis* out) {
+    simd::Vec3W<F> v[3];
+    for (int k = 0; k < 3; ++k) v[k] = simd::Vec3W<F>::load(tris.x[k], tris.y[k], tris.z[k], i);
+    const BoxSat<F> sat = boxTriangleSat<F>(box, v, margin);
+    for (std::size_t lane = 0; lane < simd::lanesOf<F>; ++lane) {
+        BoxSat<float> one{simd::lane(sat.contact, lane),
+                          simd::lane(sat.kind, lane),
+                          simd::lane(sat.boxAxis, lane),
+                          simd::lane(sat.triEdge, lane),
+                          {simd::lane(sat.n.x, lane), simd::lane(sat.n.y, lane), simd::lane(sat.n.z, lane)}};
+        out[i + lane] = axisOfLane(one);
+    }
+}
+
+void boxTriangleAxesRun(const TriangleBox& box, float margin, const TriangleLanes& tris, std::size_t n,
+                        BoxTriangleAxis* out, bool wide) {
+    if (!isFinite(box.halfExtents)) {  // the kernel refuses such a box: no contacts
+        std::fill(out, out + (wide ? triangleLanesPadded(n) : n), BoxTriangleAxis{});
+        return;
+    }
+    if (wide)
+        for (std::size_t i = 0; i < n; i += simd::kLanes) boxTriangleAxesAt<simd::FloatW>(box, margin, tris, i, out);
+    else
+        for (std::size_t i = 0; i < n; ++i) boxTriangleAxesAt<float>(box, margin, tris, i, out);
+}
+
+}  // namespace
+
+std::size_t triangleLanesPadded(std::size_t n) { return simd::roundUpToLanes<simd::FloatW>(n); }
+
+void boxTriangleAxes(const TriangleBox& box, float margin, const TriangleLanes& tris, std::size_t n,
+                     BoxTriangleAxis* out) {
+    boxTriangleAxesRun(box, margin, tris, n, out, true);
+}
+void boxTriangleAxesScalar(const TriangleBox& box, float margin, const TriangleLanes& tris, std::size_t n,
+                           BoxTriangleAxis* out) {
+    boxTriangleAxesRun(box, margin, tris, n, out, false);
+}
+
+namespace {
+
+int boxTriangleContacts(const TriangleBox& box, const Vec3 (&t)[3], Vec3 faceN, const BoxTriangleAxis& axis,
+                        std::uint8_t activeEdges, float margin, Manifold& out);
+
+Vec3 narrow(const simd::Vec3W<float>& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
 
 int collideBoxTriangle(const TriangleBox& box, const TriangleVertices& tri, std::uint8_t activeEdges, float margin,
                        Manifold& out) {
     out.pointCount = 0;
-    // Box frame, relative to the box centre.
+    if (!isFinite(box.halfExtents)) return 0;
+    const simd::Vec3W<float> v[3] = {
+        {tri[0].x, tri[0].y, tri[0].z}, {tri[1].x, tri[1].y, tri[1].z}, {tri[2].x, tri[2].y, tri[2].z}};
+    const BoxSat<float> sat = boxTriangleSat<float>(box, v, margin);
+    const BoxTriangleAxis axis = axisOfLane(sat);
+    if (axis.kind < 0) return 0;
+    const Vec3 t[3] = {narrow(sat.t[0]), narrow(sat.t[1]), narrow(sat.t[2])};
+    return boxTriangleContacts(box, t, narrow(sat.faceN), axis, activeEdges, margin, out);
+}
+
+int collideBoxTriangle(const TriangleBox& box, const TriangleVertices& tri, std::uint8_t activeEdges, float margin,
+                       const BoxTriangleAxis& axis, Manifold& out) {
+    out.pointCount = 0;
+    if (axis.kind < 0) return 0;
+    // The frame and normal the SAT worked with, computed as it does (so the same to the last bit).
     const Vec3 t[3] = {box.toBox * (tri[0] - box.pose.position), box.toBox * (tri[1] - box.pose.position),
                        box.toBox * (tri[2] - box.pose.position)};
     Vec3 faceN;
     if (!faceNormal(t[1] - t[0], t[2] - t[0], faceN)) return 0;
-    const Vec3 h = box.halfExtents;
-    if (!isFinite(t[0]) || !isFinite(h)) return 0;
+    return boxTriangleContacts(box, t, faceN, axis, activeEdges, margin, out);
+}
 
-    auto boxRadius = [&](Vec3 L) { return std::abs(L.x) * h.x + std::abs(L.y) * h.y + std::abs(L.z) * h.z; };
+namespace {
+
+/// The box kernel after its SAT: the ghost rule, then the clipped contacts.
+int boxTriangleContacts(const TriangleBox& box, const Vec3 (&t)[3], Vec3 faceN, const BoxTriangleAxis& axis,
+                        std::uint8_t activeEdges, float margin, Manifold& out) {
+    const Vec3 h = box.halfExtents;
     enum class Axis { TriangleFace, BoxFace, EdgeEdge };
-    Axis kind = Axis::TriangleFace;
-    int boxAxis = 0, triEdge = 0;
-    // The triangle face counts on the side of the box centre (two-sided triangles). Tested first: it is the axis
-    // that separates most of the triangles a body's bounds overlap.
+    Axis kind = axis.kind == 0 ? Axis::TriangleFace : (axis.kind == 1 ? Axis::BoxFace : Axis::EdgeEdge);
+    const int boxAxis = axis.boxAxis, triEdge = axis.triEdge;
     const Vec3 toFace = dot(faceN, -t[0]) >= 0 ? -faceN : faceN;
-    float best = dot(toFace, t[0]) - boxRadius(toFace);
-    if (best > margin) return 0;
     const Vec3 edges[3] = {t[1] - t[0], t[2] - t[1], t[0] - t[2]};
     const float size =
         std::max({h.x, h.y, h.z,
                   std::sqrt(std::max({dot(edges[0], edges[0]), dot(edges[1], edges[1]), dot(edges[2], edges[2])}))});
-    Vec3 n = toFace;
-    auto threshold = [&] { return best + kAxisRelativeTolerance * std::abs(best) + kAxisAbsoluteTolerance * size; };
-    for (int k = 0; k < 3; ++k) {
-        const float p0 = component(t[0], k), p1 = component(t[1], k), p2 = component(t[2], k);
-        const float hk = component(h, k);
-        const float pos = std::min({p0, p1, p2}) - hk, neg = -std::max({p0, p1, p2}) - hk;
-        const float sep = std::max(pos, neg);
-        if (sep > margin) return 0;
-        if (sep > threshold())
-            best = sep, n = axisVector(k, pos >= neg ? 1.0f : -1.0f), kind = Axis::BoxFace, boxAxis = k;
-    }
-    // Of an edge axis only the direction in which triangle edge j is the triangle's support towards the box (where
-    // the pair makes a face of the Minkowski difference: -dir on the half circle of the triangle's Gauss map through
-    // edge j's outward side) can be the contact's; the box edge along i supports every direction orthogonal to i.
-    // The other direction still proves separation, but its edge points are not the contact, and taking it dropped
-    // or under-reported deep contacts. The axes are tested unnormalised (axis e_i x edge_j has length len): a
-    // separation num / len exceeds a limit when num > limit * len, compared squared, so only an axis that wins is
-    // normalised.
     Vec3 sides[3];
     for (int j = 0; j < 3; ++j) sides[j] = cross(edges[j], faceN);  // outward: t is counter-clockwise about faceN
-    constexpr float kParallel2 = kTriangleEdgeParallelEpsilon * kTriangleEdgeParallelEpsilon;
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
-            const Vec3 e = edges[j];
-            const Vec3 L = i == 0 ? Vec3{0, -e.z, e.y} : (i == 1 ? Vec3{e.z, 0, -e.x} : Vec3{-e.y, e.x, 0});
-            const float len2 = dot(L, L);
-            if (len2 <= kParallel2 * dot(e, e)) continue;
-            const float p0 = dot(L, t[0]), p1 = dot(L, t[1]), p2 = dot(L, t[2]);
-            const float r = boxRadius(L);
-            const float pos = std::min({p0, p1, p2}) - r, neg = -std::max({p0, p1, p2}) - r;
-            if (exceeds(std::max(pos, neg), margin, len2)) return 0;
-            const float side = dot(L, sides[j]);
-            if (side == 0) continue;
-            const float sepU = side < 0 ? pos : neg;
-            if (!exceeds(sepU, threshold(), len2)) continue;
-            const float inv = 1.0f / std::sqrt(len2);
-            best = sepU * inv, n = (side < 0 ? L : -L) * inv, kind = Axis::EdgeEdge, boxAxis = i, triEdge = j;
-        }
-    }
+    Vec3 n = axis.n;
 
     // Ghost rule: the triangle feature the contact lies on must be active to keep a non-face normal.
     if (kind != Axis::TriangleFace) {
@@ -577,6 +734,8 @@ int collideBoxTriangle(const TriangleBox& box, const TriangleVertices& tri, std:
     if (cands.count == 0) return 0;
     return emitReduced(cands, n, box, out);
 }
+
+}  // namespace
 
 // ---- Hull -------------------------------------------------------------------------------------------------------
 

@@ -68,6 +68,7 @@
 //     0x7FFF in bits 0-15 marks the lone deepest-vertex point when clipping kept nothing, unless it is a vertex of
 //       the incident polygon (then its index).
 #include <array>
+#include <cstddef>
 #include <cstdint>
 
 #include "narrowphase/convex_pairs.h"
@@ -91,9 +92,11 @@ inline constexpr float kCapsuleFaceParallelSine = 0.05f;
 int collideSphereTriangle(Vec3 center, float radius, const TriangleVertices& tri, std::uint8_t activeEdges,
                           float margin, Manifold& out);
 
-/// Capsule A against triangle B. Returns 0, 1 or 2.
+/// Capsule A against triangle B. Returns 0, 1 or 2. `inReach`: the caller has found the triangle within the
+/// capsule's reach (capsuleTrianglesInReach, triangle_reach.h); the kernel then skips its quick rejections, which
+/// never change its result.
 int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices& tri, std::uint8_t activeEdges,
-                           float margin, Manifold& out);
+                           float margin, Manifold& out, bool inReach = false);
 
 /// Box A (pose, half extents) against triangle B. Returns 0 to 4.
 int collideBoxTriangle(const Transform& boxPose, Vec3 halfExtents, const TriangleVertices& tri,
@@ -113,6 +116,39 @@ Mat3 rotationMatrix(Quat q);
 /// The same kernel for a box made by triangleBox.
 int collideBoxTriangle(const TriangleBox& box, const TriangleVertices& tri, std::uint8_t activeEdges, float margin,
                        Manifold& out);
+
+/// Triangles in SoA form: vertex k of triangle i is (x[k][i], y[k][i], z[k][i]). Functions that take them in SIMD
+/// lanes read and write whole batches: every array must hold triangleLanesPadded(n) readable entries (the padding any
+/// finite values), and so must their outputs.
+struct TriangleLanes {
+    const float* x[3];
+    const float* y[3];
+    const float* z[3];
+};
+/// n rounded up to whole SIMD batches.
+std::size_t triangleLanesPadded(std::size_t n);
+
+/// What the SAT of the box kernel chose for a triangle: kind -1 when there is no contact (some axis separates by
+/// more than the margin, or the triangle is degenerate or not finite), else 0 the triangle's face, 1 the box face
+/// along boxAxis, 2 box axis boxAxis x triangle edge triEdge; n the unit axis in the box's frame, from the box
+/// towards the triangle, before the ghost rule.
+struct BoxTriangleAxis {
+    int kind = -1;
+    int boxAxis = 0;
+    int triEdge = 0;
+    Vec3 n;
+};
+/// The box kernel's SAT for triangles [0, n) in SIMD lanes (one template with the kernel's own, so the choices are
+/// the same; tests/narrowphase/triangle_reach_test.cpp checks that the manifolds are too, bit for bit); `out` holds
+/// triangleLanesPadded(n) entries.
+void boxTriangleAxes(const TriangleBox& box, float margin, const TriangleLanes& tris, std::size_t n,
+                     BoxTriangleAxis* out);
+/// The same one triangle at a time (n entries).
+void boxTriangleAxesScalar(const TriangleBox& box, float margin, const TriangleLanes& tris, std::size_t n,
+                           BoxTriangleAxis* out);
+/// The box kernel after its SAT, given the SAT's answer (from boxTriangleAxes): the same manifold as the kernel.
+int collideBoxTriangle(const TriangleBox& box, const TriangleVertices& tri, std::uint8_t activeEdges, float margin,
+                       const BoxTriangleAxis& axis, Manifold& out);
 
 /// Hull A (posed by `hullPose`, with its adjacency from buildHullAdjacency in hull_pairs.h) against triangle B.
 /// Returns 0 to 4.

@@ -537,6 +537,38 @@ TEST(CapsuleBox, RandomPosesAgreeWithLibccd) {
                 hits, checked, ties, band, disagree);
 }
 
+// The capsule-box kernel's closed-form core distance (segment against box, hull_pairs.cpp) against GJK on the hull of
+// the box's corners (collideCapsuleHull), for speculative gaps as well as overlaps: the margin is wide enough that
+// every pose gets a manifold. Tolerance 1e-4 of the size: both are exact up to float rounding of unit-size inputs,
+// GJK's termination tolerance is well below that.
+TEST(CapsuleBox, CoreDistanceAgreesWithGjk) {
+    std::mt19937 rng(4242);
+    std::uniform_real_distribution<float> u(-1, 1), frac(0, 1), half(0.05f, 1.0f);
+    int separated = 0;
+    for (int it = 0; it < 5000; ++it) {
+        const Vec3 hb{half(rng), half(rng), half(rng)};
+        const Transform pb{{u(rng), u(rng), u(rng)}, randomRotation(rng)};
+        // Some capsules are axis-aligned with the box (flat on a face, along an edge), where the distance is flat in
+        // the segment parameter.
+        const float hh = it % 4 == 0 ? 0.0f : 0.8f * frac(rng), radius = 0.02f + 0.3f * frac(rng);
+        const Quat capsuleTurn =
+            it % 3 == 0 ? pb.rotation * Quat{0, 0, std::sqrt(0.5f), std::sqrt(0.5f)} : randomRotation(rng);
+        Vec3 dir{u(rng), u(rng), u(rng)};
+        dir = dir / std::max(length(dir), 1e-3f);
+        const float size = std::max(length(hb), hh + radius);
+        const CapsuleSegment cap{pb.position + dir * (1.6f * frac(rng) * (length(hb) + hh + radius)),
+                                 rotate(capsuleTurn, {0, hh, 0}), radius};
+        const float margin = 4.0f;
+        Manifold m, mh;
+        ASSERT_TRUE(collideCapsuleBox(cap, pb, hb, margin, m)) << it;
+        ASSERT_TRUE(collideCapsuleHull(cap, boxHull(hb), pb, margin, mh)) << it;
+        separated += maxDepth(m) < 0 ? 1 : 0;
+        EXPECT_NEAR(maxDepth(m), maxDepth(mh), 1e-4f * size) << it;
+        EXPECT_GT(dot(m.normal, mh.normal), 0.999f) << it;
+    }
+    EXPECT_GT(separated, 2500);
+}
+
 }  // namespace
 
 namespace {
