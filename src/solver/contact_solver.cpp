@@ -378,7 +378,7 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
             if (k == ~0u) continue;
             const ContactPair& pair = contacts.pairs[k];
             const Manifold& mf = contacts.manifolds[k];
-            // Side data: position, velocities, inverse mass and world inverse inertia.
+            // Side data: position, velocities and material (the masses are in the mass rows).
             struct Side {
                 Vec3 p, v, w;
                 float friction = 0, restitution = 0;
