@@ -42,8 +42,8 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
     const auto& slots = storage.slots();
     // Manifolds come in canonical order, which changes little from step to step: each chunk tries last step's
     // entries from its own first index, then from the entry after the last match, so a settled scene reads last
-    // step's entries in order. Only the manifolds that guess misses look in the hash table, which is built for
-    // them alone: a settled scene builds none.
+    // step's entries in order. Only the manifolds the guess misses are looked up afterwards, among the entries it
+    // left (directly when both are few, else through the hash table): a settled scene builds no table.
     pool.forChunks(n, kChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
         std::fill(impulses.begin() + begin * kMaxManifoldPoints, impulses.begin() + end * kMaxManifoldPoints,
                   PointImpulse{});
