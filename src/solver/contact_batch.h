@@ -199,9 +199,6 @@ struct Pair {
 inline std::span<ContactBatch::Point> pointsOf(ContactBatch& b) {
     return {b.points, static_cast<std::size_t>(b.pointCount)};
 }
-inline std::span<const ContactBatch::Point> pointsOf(const ContactBatch& b) {
-    return {b.points, static_cast<std::size_t>(b.pointCount)};
-}
 
 template <class F>
 Vec3W<F> anchorA(const ContactBatch::Point& p, std::size_t lane) {
