@@ -23,6 +23,15 @@ inline std::string wholeNumberError(std::string_view flag, std::string_view text
            "], not '" + std::string(text) + "'";
 }
 
+/// An argument no option claimed: the first bare word is the scene; an unknown option or a second scene is an error,
+/// returned as what to tell the user.
+inline std::optional<std::string> takeSceneArgument(std::string_view arg, std::string& scene) {
+    if (!arg.empty() && arg[0] == '-') return "unknown option '" + std::string(arg) + "'";
+    if (!scene.empty()) return "more than one scene given ('" + scene + "' and '" + std::string(arg) + "')";
+    scene = std::string(arg);
+    return std::nullopt;
+}
+
 /// S1 from the working directory when it is there (a checkout), else from `scenesDir` (the source tree's scenes).
 inline std::string defaultScene(const std::string& scenesDir) {
     const std::string candidates[] = {"scenes/s1_pyramid.json", scenesDir + "/s1_pyramid.json"};

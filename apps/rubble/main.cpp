@@ -97,12 +97,9 @@ Options parseOptions(int argc, char** argv) {
         else if (a == "--help" || a == "-h") {
             std::fputs(kUsage, stdout);
             std::exit(0);
-        } else if (!a.empty() && a[0] == '-')
-            usageError("unknown option '" + std::string(a) + "'");
-        else if (o.scene.empty())
-            o.scene = std::string(a);
-        else
-            usageError("more than one scene given ('" + o.scene + "' and '" + std::string(a) + "')");
+        } else if (const auto error = rubble::apps::takeSceneArgument(a, o.scene)) {
+            usageError(*error);
+        }
     }
     if (o.scene.empty()) o.scene = defaultScene();
     return o;

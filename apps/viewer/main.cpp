@@ -87,12 +87,9 @@ rubble::viewer::ViewerOptions parseOptions(int argc, char** argv) {
                                std::string(name) + "'");
                 rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
             }
-        } else if (!a.empty() && a[0] == '-')
-            usageError("unknown option '" + std::string(a) + "'");
-        else if (o.scene.empty())
-            o.scene = std::string(a);
-        else
-            usageError("more than one scene given ('" + o.scene + "' and '" + std::string(a) + "')");
+        } else if (const auto error = rubble::apps::takeSceneArgument(a, o.scene)) {
+            usageError(*error);
+        }
     }
     if (o.marble && !o.scene.empty()) usageError("give a scene or --demo marble, not both");
     if (!o.screenshot.empty() && o.frames == 0) usageError("--screenshot needs --frames N (the headless mode)");
