@@ -34,6 +34,7 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
                              std::vector<PointImpulse>& impulses) {
     const std::size_t n = contacts.manifolds.size();
     currentKeys_.resize(n);
+    carried_.resize(n);
     impulses.resize(n * kMaxManifoldPoints);
     const std::size_t chunks = TaskPool::chunkCount(n, kChunk);
     chunkMatches_.assign(chunks, {});
@@ -47,6 +48,7 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
     pool.forChunks(n, kChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
         std::fill(impulses.begin() + begin * kMaxManifoldPoints, impulses.begin() + end * kMaxManifoldPoints,
                   PointImpulse{});
+        std::fill(carried_.begin() + begin, carried_.begin() + end, std::uint8_t{0});
         std::vector<std::uint32_t>& misses = chunkMisses_[chunk];
         misses.clear();
         // The window starts a little before the chunk's own index: manifolds new since last step shift it back.
@@ -66,7 +68,8 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
             const std::size_t last = std::min(previous_.size(), next + window);
             while (at < last && !(previous_[at].key == key)) ++at;
             if (at < last) {
-                carry(contacts.manifolds[m], previous_[at], &impulses[m * kMaxManifoldPoints], chunkMatches_[chunk]);
+                carry(contacts.manifolds[m], previous_[at], &impulses[m * kMaxManifoldPoints], carried_[m],
+                      chunkMatches_[chunk]);
                 // Relaxed: each entry is taken by one manifold at most (keys are unique), the flag only says so.
                 std::atomic_ref<std::uint8_t>(previousMatched_[at]).store(1, std::memory_order_relaxed);
                 next = at + 1;
@@ -90,7 +93,7 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
                     for (const std::uint32_t e : unmatched_)
                         if (previous_[e].key == currentKeys_[m]) {
                             carry(contacts.manifolds[m], previous_[e], &impulses[std::size_t{m} * kMaxManifoldPoints],
-                                  chunkMatches_[chunk]);
+                                  carried_[m], chunkMatches_[chunk]);
                             break;
                         }
             missCount = 0;
@@ -108,7 +111,7 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
                     if (entry == 0) break;
                     if (previous_[entry - 1].key == key) {
                         carry(contacts.manifolds[m], previous_[entry - 1],
-                              &impulses[std::size_t{m} * kMaxManifoldPoints], chunkMatches_[chunk]);
+                              &impulses[std::size_t{m} * kMaxManifoldPoints], carried_[m], chunkMatches_[chunk]);
                         break;
                     }
                 }
@@ -119,8 +122,10 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
     for (const Matches& c : chunkMatches_) matchedManifolds_ += c.manifolds, matchedPoints_ += c.points;
 }
 
-void ContactCache::carry(const Manifold& now, const Entry& old, PointImpulse* out, Matches& matches) {
+void ContactCache::carry(const Manifold& now, const Entry& old, PointImpulse* out, std::uint8_t& carried,
+                         Matches& matches) {
     ++matches.manifolds;
+    const std::uint32_t pointsBefore = matches.points;
     bool taken[kMaxManifoldPoints] = {};
     bool matched[kMaxManifoldPoints] = {};
     for (int i = 0; i < now.pointCount; ++i)
@@ -145,6 +150,7 @@ void ContactCache::carry(const Manifold& now, const Entry& old, PointImpulse* ou
         taken[best] = true;
         ++matches.points;
     }
+    if (matches.points != pointsBefore) carried = 1;
 }
 
 void ContactCache::remember(const Contacts& contacts, const std::vector<PointImpulse>& impulses, TaskPool& pool) {

@@ -67,6 +67,8 @@ public:
     /// Appends the slots of the bodies that touched `slot` in the last step.
     void partnersOf(std::uint32_t slot, std::vector<std::uint32_t>& out) const;
 
+    /// Per manifold of the contacts last passed to warmStart: 1 where at least one point carried last step's impulses.
+    std::span<const std::uint8_t> carried() const { return carried_; }
     std::uint32_t matchedManifolds() const { return matchedManifolds_; }
     std::uint32_t matchedPoints() const { return matchedPoints_; }
     std::uint32_t size() const { return static_cast<std::uint32_t>(previous_.size()); }
@@ -85,9 +87,11 @@ private:
     /// Hashes every entry of previous_ into table_ (in parallel).
     void rebuildTable(TaskPool& pool);
     /// Writes the impulses of the points of `now` that match a point of `old` (by feature, then by position).
-    static void carry(const Manifold& now, const Entry& old, PointImpulse* out, Matches& matches);
+    static void carry(const Manifold& now, const Entry& old, PointImpulse* out, std::uint8_t& carried,
+                      Matches& matches);
 
     std::vector<ContactKey> currentKeys_;  ///< keys of the manifolds passed to warmStart, for remember
+    std::vector<std::uint8_t> carried_;
     std::vector<Entry> previous_;
     std::vector<std::uint32_t> table_;  ///< open addressing over previous_: index + 1, 0 = empty
     bool tableValid_ = false;           ///< table_ indexes previous_ as it is now

@@ -631,6 +631,10 @@ void World::step(float dt) {
                 detail::StageTimer timer(profile, Stage::ContactCache, w.origin);
                 w.sleeping.flushWarmStarts(w.contactCache);
                 w.contactCache.warmStart(w.contacts, w.bodies, *w.pool, w.impulses);
+                if (solver.warmStarting && solver.seedRestingLoads && w.effects.has(Effect::Gravity))
+                    profile.seededManifolds =
+                        w.restingLoads.seed(w.contacts, w.contactCache.carried(), w.bodies.moving,
+                                            {w.settings.gravity, params.dt, solver.linearSlop}, w.impulses);
             }
             profile.matchedManifolds = w.contactCache.matchedManifolds();
             profile.warmStartedPoints = w.contactCache.matchedPoints();

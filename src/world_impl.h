@@ -22,6 +22,7 @@
 #include "shapes/shape.h"
 #include "solver/contact_solver.h"
 #include "solver/joint_solver.h"
+#include "solver/resting_loads.h"
 
 namespace rubble {
 namespace detail {
@@ -71,6 +72,7 @@ struct World::Impl {
     detail::Contacts contacts;
     detail::ContactCache contactCache;
     std::vector<detail::PointImpulse> impulses;
+    detail::RestingLoads restingLoads;
     detail::IslandBuilder islandBuilder;
     detail::Islands islands;
     detail::SleepingIslands sleeping;

@@ -64,6 +64,9 @@ TEST(ContactCache, CarriesImpulsesOfMatchingPointsAndForgetsTheRest) {
     EXPECT_EQ(impulses[3].normal, 2.0f);
     EXPECT_EQ(impulses[3].tangent2, -0.25f);
     EXPECT_EQ(impulses[kMaxManifoldPoints].normal, 0.0f) << "a different pair with the same feature id";
+    ASSERT_EQ(cache.carried().size(), 2u);
+    EXPECT_EQ(cache.carried()[0], 1u);
+    EXPECT_EQ(cache.carried()[1], 0u) << "new pairs carry nothing (the resting-load guess starts them)";
     cache.remember(step2, impulses, f.pool);
 
     // Step 3: the pair (2, 3) comes back, but it was forgotten when it separated.
@@ -72,6 +75,8 @@ TEST(ContactCache, CarriesImpulsesOfMatchingPointsAndForgetsTheRest) {
     step3.manifolds = {manifoldWith({7})};
     cache.warmStart(step3, f.storage, f.pool, impulses);
     EXPECT_EQ(cache.matchedManifolds(), 0u);
+    ASSERT_EQ(cache.carried().size(), 1u);
+    EXPECT_EQ(cache.carried()[0], 0u);
 }
 
 TEST(ContactCache, NewFeaturesTakeTheImpulsesOfAnOldPointNearby) {

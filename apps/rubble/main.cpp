@@ -266,8 +266,10 @@ int run(const Options& options) {
                     last.movingPairs, last.staticPairs, last.meshPairs, last.meshTriangles);
         std::printf("narrow     %u manifolds, %u contact points", last.manifolds, last.contactPoints);
         std::printf("\n");
-        std::printf("cache      %u of %u manifolds continue last step's, %u of %u points warm-started\n",
-                    last.matchedManifolds, last.manifolds, last.warmStartedPoints, last.contactPoints);
+        std::printf(
+            "cache      %u of %u manifolds continue last step's, %u of %u points warm-started; %u new ones started "
+            "from resting loads\n",
+            last.matchedManifolds, last.manifolds, last.warmStartedPoints, last.contactPoints, last.seededManifolds);
         std::printf("islands    %u islands, the largest of %u bodies; %u bodies asleep\n", last.islands,
                     last.largestIsland, last.sleepingBodies);
         std::printf(

@@ -49,6 +49,7 @@ struct Profile {
     std::uint32_t contactPoints = 0;
     std::uint32_t matchedManifolds = 0;   ///< manifolds that continue one of the previous step (same pair and parts)
     std::uint32_t warmStartedPoints = 0;  ///< points whose feature matched: they start from last step's impulses
+    std::uint32_t seededManifolds = 0;    ///< new manifolds started from the loads that hold their bodies at rest
     std::uint32_t constraints = 0;        ///< contact manifolds the solver works on (a dynamic body on one side)
     std::uint32_t colors = 0;             ///< graph colours of the contact constraints (most in any one block)
     std::uint32_t solverBlocks = 0;       ///< blocks of small islands, each solved whole by one task

@@ -47,11 +47,11 @@ std::optional<Integrator> integratorFromName(std::string_view name);
 
 /// How the contact solver removes overlap. Baumgarte (a fraction of the overlap beyond a slop fed back as approach
 /// speed inside the velocity iterations) is the default: measured on S1 with the scenes' 8 + 2 iterations and one
-/// substep it moves no cube more than 4.4 cm in 600 steps, where the soft step's contacts, as soft as one 60 Hz
-/// substep allows, let the pyramid sag 16 cm. The soft step (soft contact constraints whose stiffness follows the
-/// substep rate, then relax iterations that take the push-out velocity away again) wins with substeps and holds tall
-/// towers better; split impulses correct positions with pseudo-velocities that never reach the real ones, so that
-/// push-out adds no energy.
+/// substep (and the resting-load guess, SolverSettings::seedRestingLoads) it moves no cube more than 0.1 mm in 600
+/// steps, where the soft step's contacts, as soft as one 60 Hz substep allows, let the pyramid sag 10 cm. The soft step
+/// (soft contact constraints whose stiffness follows the substep rate, then relax iterations that take the push-out
+/// velocity away again) wins with substeps and holds tall towers better; split impulses correct positions with
+/// pseudo-velocities that never reach the real ones, so that push-out adds no energy.
 enum class PositionCorrection : std::uint8_t { SoftStep, Baumgarte, SplitImpulse };
 
 std::string_view positionCorrectionName(PositionCorrection p);
@@ -62,6 +62,11 @@ struct SolverSettings {
     PositionCorrection positionCorrection = PositionCorrection::Baumgarte;
     /// Start each step from last step's impulses (matched by the contact cache).
     bool warmStarting = true;
+    /// With warm starting: a contact new this step through which a body rests on something lower starts from the
+    /// impulses that would hold that body still under gravity, with everything resting on it (computed top down,
+    /// solver/resting_loads.h). Without it, a stack that appears at once gets its loads only as fast as the
+    /// iterations pass them down, one layer or so each, and its upper layers fall into the layers below.
+    bool seedRestingLoads = true;
     /// Approach speeds below this do not bounce, m/s: resting contacts would otherwise jitter.
     float restitutionThreshold = 1.0f;
     /// Soft step: stiffness of contacts as a natural frequency (capped at a quarter of the substep rate), Hz, and

@@ -532,10 +532,11 @@ struct Builder {
 
 void Builder::parseSettings(const Json& j, const Loc& at) {
     expectObject(j, at);
-    checkKeys(j, at,
-              {"dt", "gravity", "substeps", "velocity_iterations", "position_iterations", "threads", "integrator",
-               "effects", "broadphase", "position_correction", "warm_starting", "shock_propagation", "sleep",
-               "contact_hertz", "contact_damping_ratio", "max_push_out_velocity", "baumgarte", "linear_slop"});
+    checkKeys(
+        j, at,
+        {"dt", "gravity", "substeps", "velocity_iterations", "position_iterations", "threads", "integrator", "effects",
+         "broadphase", "position_correction", "warm_starting", "seed_resting_loads", "shock_propagation", "sleep",
+         "contact_hertz", "contact_damping_ratio", "max_push_out_velocity", "baumgarte", "linear_slop"});
     WorldSettings& s = scene.settings;
     if (j.contains("dt")) s.timeStep = getFloat(j["dt"], at / "dt", Sign::Positive);
     if (j.contains("gravity")) s.gravity = getVec3(j["gravity"], at / "gravity");
@@ -571,6 +572,8 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
         s.solver.positionCorrection = *v;
     }
     if (j.contains("warm_starting")) s.solver.warmStarting = getBool(j["warm_starting"], at / "warm_starting");
+    if (j.contains("seed_resting_loads"))
+        s.solver.seedRestingLoads = getBool(j["seed_resting_loads"], at / "seed_resting_loads");
     if (j.contains("shock_propagation"))
         s.solver.shockPropagation = getBool(j["shock_propagation"], at / "shock_propagation");
     const auto solverFloat = [&](const char* key, float& value, Sign sign) {

@@ -1,0 +1,179 @@
+#include "solver/resting_loads.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+namespace rubble::detail {
+namespace {
+
+constexpr std::uint32_t kFixed = ~0u;
+constexpr std::uint32_t kNotResting = ~0u;
+/// A contact whose normal leans further than this from the vertical (cosine with up, ~75 degrees) holds nothing up
+/// by its normal force alone; side contacts in a wall are the common case.
+constexpr float kMinSupportCosine = 0.25f;
+/// Rounds of the active set: points that came out pulling are dropped and the rest solved again.
+constexpr int kActiveSetRounds = 4;
+
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+
+/// Least-norm point forces f >= 0 with sum f_i column_i = wanted (force, torque). Tikhonov-regularised, so that a
+/// body whose supports cannot balance it exactly (a sloped contact, a single point off the centre) gets the
+/// least-squares answer; the regularisation is relative, so units and sizes do not matter.
+template <class SupportPoint>
+void balance(std::vector<SupportPoint>& points, const Vec6& wanted) {
+    const auto columnOf = [](const SupportPoint& p) {
+        Vec6 c;
+        for (int i = 0; i < 6; ++i) c(i) = p.column[i];
+        return c;
+    };
+    for (int round = 0; round < kActiveSetRounds; ++round) {
+        Mat6 normal = Mat6::Zero();
+        for (const SupportPoint& p : points)
+            if (p.active) normal += columnOf(p) * columnOf(p).transpose();
+        normal.diagonal().array() += 1e-9 * normal.trace() + 1e-30;
+        const Vec6 y = normal.ldlt().solve(wanted);
+        bool dropped = false;
+        for (SupportPoint& p : points) {
+            p.force = p.active ? static_cast<float>(columnOf(p).dot(y)) : 0.0f;
+            if (p.force < 0) p.force = 0, p.active = false, dropped = true;
+        }
+        if (!dropped) return;
+    }
+}
+
+}  // namespace
+
+std::uint32_t RestingLoads::seed(const Contacts& contacts, std::span<const std::uint8_t> carried,
+                                 const MovingBodies& bodies, const RestingLoadParams& params,
+                                 std::vector<PointImpulse>& impulses) {
+    const float g = length(params.gravity);
+    if (!(g > 0) || !(params.h > 0)) return 0;
+    const Vec3 up = params.gravity * (-1.0f / g);
+    const std::size_t bodyCount = bodies.px.size();
+    const std::size_t manifoldCount = contacts.manifolds.size();
+    const auto heightOf = [&](std::uint32_t i) {
+        return bodies.px[i] * up.x + bodies.py[i] * up.y + bodies.pz[i] * up.z;
+    };
+    const auto touching = [&](const Manifold& m) {
+        for (int i = 0; i < m.pointCount; ++i)
+            if (m.points[i].depth >= -params.touchDistance) return true;
+        return false;
+    };
+    const auto supportOf = [&](std::size_t m, Support& out) {
+        const ContactPair& p = contacts.pairs[m];
+        const Manifold& manifold = contacts.manifolds[m];
+        const float normalUp = dot(manifold.normal, up);
+        if (std::fabs(normalUp) < kMinSupportCosine) return false;
+        // The normal points from A to B: B rests on A when it points up.
+        const bool upperIsB = normalUp > 0;
+        if (upperIsB ? p.bStatic : p.aStatic) return false;
+        const std::uint32_t upper = upperIsB ? p.b : p.a;
+        if (!(bodies.invMass[upper] > 0)) return false;
+        std::uint32_t lower = upperIsB ? p.a : p.b;
+        if ((upperIsB ? p.aStatic : p.bStatic) || !(bodies.invMass[lower] > 0))
+            lower = kFixed;
+        else if (!(heightOf(lower) < heightOf(upper)))  // strictly lower, so that the order below has no cycles
+            return false;
+        if (!touching(manifold)) return false;
+        out = {static_cast<std::uint32_t>(m), upper, lower, upperIsB};
+        return true;
+    };
+    const auto isCarried = [&](std::size_t m) { return m < carried.size() && carried[m] != 0; };
+
+    // The bodies that rest on a new contact, top down.
+    if (restingOf_.size() != bodyCount) restingOf_.assign(bodyCount, kNotResting);
+    resting_.clear();
+    for (std::size_t m = 0; m < manifoldCount; ++m) {
+        Support s;
+        if (isCarried(m) || !supportOf(m, s)) continue;
+        if (restingOf_[s.upper] == kNotResting) {
+            restingOf_[s.upper] = 0;
+            resting_.push_back(s.upper);
+        }
+    }
+    if (resting_.empty()) return 0;
+    std::sort(resting_.begin(), resting_.end(), [&](std::uint32_t x, std::uint32_t y) {
+        const float hx = heightOf(x), hy = heightOf(y);
+        return hx > hy || (hx == hy && x < y);
+    });
+    for (std::size_t k = 0; k < resting_.size(); ++k) restingOf_[resting_[k]] = static_cast<std::uint32_t>(k);
+
+    // Each resting body's supports, and the supports through which something rests on it, grouped by body.
+    supports_.clear();
+    links_.clear();
+    const auto resting = [&](std::uint32_t index, bool isStatic) {
+        return !isStatic && restingOf_[index] != kNotResting;
+    };
+    for (std::size_t m = 0; m < manifoldCount; ++m) {
+        const ContactPair& p = contacts.pairs[m];
+        Support s;
+        if ((!resting(p.a, p.aStatic) && !resting(p.b, p.bStatic)) || !supportOf(m, s)) continue;
+        const std::uint32_t upper = restingOf_[s.upper];
+        const std::uint32_t lower = s.lower == kFixed ? kNotResting : restingOf_[s.lower];
+        if (upper == kNotResting && lower == kNotResting) continue;
+        const auto at = static_cast<std::uint32_t>(supports_.size());
+        supports_.push_back(s);
+        if (upper != kNotResting) links_.push_back({upper, at, false});
+        if (lower != kNotResting) links_.push_back({lower, at, true});
+    }
+    linkStart_.assign(resting_.size() + 1, 0);
+    for (const Link& l : links_) ++linkStart_[l.body + 1];
+    for (std::size_t k = 0; k < resting_.size(); ++k) linkStart_[k + 1] += linkStart_[k];
+    grouped_.resize(links_.size());
+    linkFill_.assign(linkStart_.begin(), linkStart_.end() - 1);
+    for (const Link& l : links_) grouped_[linkFill_[l.body]++] = l;  // manifold order within a body
+    links_.swap(grouped_);
+
+    std::uint32_t written = 0;
+    std::vector<SupportPoint>& points = points_;
+    const float invH = 1.0f / params.h;
+    for (std::size_t k = 0; k < resting_.size(); ++k) {
+        const std::uint32_t body = resting_[k];
+        const Vec3 centre{bodies.px[body], bodies.py[body], bodies.pz[body]};
+        // What the supports must balance: the weight, and the loads of what rests on this body (impulses already
+        // carried or written, since everything above came first).
+        Vec3 force = params.gravity * (bodies.gravityScale[body] / bodies.invMass[body]);
+        Vec3 torque{0, 0, 0};
+        points.clear();
+        for (std::uint32_t l = linkStart_[k]; l < linkStart_[k + 1]; ++l) {
+            const Support& s = supports_[links_[l].support];
+            const Manifold& manifold = contacts.manifolds[s.manifold];
+            // Direction in which the support pushes the upper body.
+            const Vec3 push = s.upperIsB ? manifold.normal : manifold.normal * -1.0f;
+            for (int i = 0; i < manifold.pointCount; ++i) {
+                const Vec3 arm = manifold.points[i].position - centre;
+                if (links_[l].above) {
+                    const Vec3 load =
+                        push * (-impulses[std::size_t{s.manifold} * kMaxManifoldPoints + i].normal * invH);
+                    force = force + load;
+                    torque = torque + cross(arm, load);
+                } else if (manifold.points[i].depth >= -params.touchDistance) {
+                    const Vec3 turn = cross(arm, push);
+                    points.push_back({{push.x, push.y, push.z, turn.x, turn.y, turn.z}});
+                }
+            }
+        }
+        Vec6 wanted;
+        wanted << -force.x, -force.y, -force.z, -torque.x, -torque.y, -torque.z;
+        balance(points, wanted);
+        std::size_t next = 0;
+        for (std::uint32_t l = linkStart_[k]; l < linkStart_[k + 1]; ++l) {
+            if (links_[l].above) continue;
+            const Support& s = supports_[links_[l].support];
+            const Manifold& manifold = contacts.manifolds[s.manifold];
+            const bool write = !isCarried(s.manifold);
+            written += write;
+            for (int i = 0; i < manifold.pointCount; ++i) {
+                if (manifold.points[i].depth < -params.touchDistance) continue;
+                const float f = points[next++].force;
+                if (write) impulses[std::size_t{s.manifold} * kMaxManifoldPoints + i].normal = f * params.h;
+            }
+        }
+    }
+    for (const std::uint32_t body : resting_) restingOf_[body] = kNotResting;
+    return written;
+}
+
+}  // namespace rubble::detail
