@@ -168,7 +168,10 @@ std::uint32_t RestingLoads::seed(const Contacts& contacts, std::span<const std::
             for (int i = 0; i < manifold.pointCount; ++i) {
                 if (manifold.points[i].depth < -params.touchDistance) continue;
                 const float f = points[next++].force;
-                if (write) impulses[std::size_t{s.manifold} * kMaxManifoldPoints + i].normal = f * params.h;
+                // A guess that is not finite (a degenerate manifold) is no guess: the point starts from zero.
+                if (write)
+                    impulses[std::size_t{s.manifold} * kMaxManifoldPoints + i].normal =
+                        std::isfinite(f) ? f * params.h : 0.0f;
             }
         }
     }

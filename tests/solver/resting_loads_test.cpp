@@ -157,3 +157,16 @@ TEST(RestingLoads, SideContactsFarPointsAndWeightlessWorldsGetNothing) {
     EXPECT_EQ(weightless.seed(), 0u);
     EXPECT_EQ(weightless.normal(m, 0), 0.0f);
 }
+
+// A manifold point that is not finite spoils its body's balance; that body's points start from zero, and the other
+// bodies' guesses stand.
+TEST(RestingLoads, ANonFinitePointLeavesItsBodyWithoutAGuess) {
+    Pile s;
+    const std::uint32_t bad = s.body({0, 0.5f, 0}, 1), good = s.body({5, 0.5f, 0}, 1);
+    const std::size_t spoilt = s.touch(kGround, true, bad, {{0, 0, -0.5f}, {NAN, 0, 0.5f}});
+    const std::size_t fine = s.touch(kGround, true, good, {{5, 0, -0.5f}, {5, 0, 0.5f}});
+    s.seed();
+    EXPECT_EQ(s.normal(spoilt, 0), 0.0f);
+    EXPECT_EQ(s.normal(spoilt, 1), 0.0f);
+    expectNear(s.total(fine), kG * kH);
+}
