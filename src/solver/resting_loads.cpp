@@ -1,5 +1,10 @@
 #include "solver/resting_loads.h"
 
+// GCC 12 reports Eigen's AVX-512 paths for 6x6 doubles as reading uninitialised lanes (a known false positive of its
+// maybe-uninitialized analysis through the intrinsics headers) at -O2 and above.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
