@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
 #include "narrowphase/clip.h"
 #include "simd/simd.h"
@@ -35,7 +36,7 @@ struct BoxSat {
 
 /// Calls fn on every float field of s, in one fixed order (lanes are stored and read back with it).
 template <class F, class Fn>
-void forEachValue(BoxSat<F>& s, Fn&& fn) {
+[[gnu::always_inline]] inline void forEachValue(BoxSat<F>& s, Fn&& fn) {
     for (auto* m : {&s.ra, &s.rb, &s.r})
         for (auto& row : *m)
             for (F& v : row) fn(v);
@@ -316,22 +317,57 @@ template <class F>
     for (int o = 0; o < 4; ++o) out.chosen[o] = firstFour[o];
     const auto reduce = count > F(4.0f);
     if (simd::none(reduce)) return;
+    // The reduction is a few arg-max scans over the used slots: the first slot (in slot order) with the largest value
+    // among the eligible ones, if it beats `start`. One pair at a time that is a branchy scan. In lanes the same
+    // scan's compare-and-select chain through the running best was most of the clipping's time, so there the
+    // candidates are set aside (independent per slot), then a running max, then the first slot that reaches it:
+    // the same answer.
+    constexpr bool kLanes = !std::is_same_v<F, float>;
+    F candidate[kLanes ? kFaceSlots : 1];
+    const F none(-1.0f);
+    F scanBest = zero, scanIndex = none;
+    const auto begin = [&](const F& start) { scanBest = start, scanIndex = none; };
+    // Invalid slots, and values that are not numbers, never win.
+    const auto offer = [&](int x, MaskOf<F> eligible, const F& value, const F& start) {
+        if constexpr (kLanes) {
+            candidate[x] = select(simd::andMask(eligible, value == value), value, start);
+        } else if (eligible && value > scanBest) {
+            scanBest = value, scanIndex = float(used[x]);
+        }
+    };
+    const auto firstLargest = [&](const F& start, F& index) {
+        if constexpr (kLanes) {
+            F best = start;
+            for (int x = 0; x < usedCount; ++x) best = simd::max(best, candidate[x]);
+            index = none;
+            for (int x = usedCount - 1; x >= 0; --x)
+                index = select(simd::andMask(candidate[x] == best, candidate[x] > start), F(float(used[x])), index);
+            return best;
+        } else {
+            index = scanIndex;
+            return scanBest;
+        }
+    };
     F deepest(-INFINITY), su = zero, sv = zero;
+    begin(deepest);
     for (int x = 0; x < usedCount; ++x) {
         const int k = used[x];
-        deepest = select(simd::andMask(out.valid[k], out.depth[k] > deepest), out.depth[k], deepest);
+        offer(x, out.valid[k], out.depth[k], deepest);
         su = su + select(out.valid[k], out.u[k], zero), sv = sv + select(out.valid[k], out.v[k], zero);
     }
+    {
+        F unused;
+        deepest = firstLargest(deepest, unused);
+    }
     const F mu0 = su / count, mv0 = sv / count;
-    const F none(-1.0f);
-    F i0 = none, best = none;
+    F i0;
+    begin(none);
     for (int x = 0; x < usedCount; ++x) {
         const int k = used[x];
         const F du = out.u[k] - mu0, dv = out.v[k] - mv0, d2 = du * du + dv * dv;
-        const auto take =
-            simd::andMask(simd::andMask(out.valid[k], out.depth[k] >= deepest - F(kReductionDepthTie)), d2 > best);
-        best = select(take, d2, best), i0 = select(take, F(float(k)), i0);
+        offer(x, simd::andMask(out.valid[k], out.depth[k] >= deepest - F(kReductionDepthTie)), d2, none);
     }
+    firstLargest(none, i0);
     // The plane coordinates of the slot chosen in each lane.
     const auto coordinatesOf = [&](const F& chosen, F& u, F& v) {
         u = zero, v = zero;
@@ -343,32 +379,34 @@ template <class F>
     };
     F u0, v0;
     coordinatesOf(i0, u0, v0);
-    F i1 = none;
-    best = none;
+    F i1;
+    begin(none);
     for (int x = 0; x < usedCount; ++x) {
         const int k = used[x];
         const F du = out.u[k] - u0, dv = out.v[k] - v0, d2 = du * du + dv * dv;
-        const auto take = simd::andMask(simd::andMask(out.valid[k], i0 != F(float(k))), d2 > best);
-        best = select(take, d2, best), i1 = select(take, F(float(k)), i1);
+        offer(x, simd::andMask(out.valid[k], i0 != F(float(k))), d2, none);
     }
+    firstLargest(none, i1);
     F u1, v1;
     coordinatesOf(i1, u1, v1);
     const F eu = u1 - u0, ev = v1 - v0;
-    F i2 = none, orient = one;
-    best = none;
+    F i2, orient = one;
+    F areas[kFaceSlots];
+    begin(none);
     for (int x = 0; x < usedCount; ++x) {
         const int k = used[x];
-        const F area = eu * (out.v[k] - v0) - ev * (out.u[k] - u0), size = abs(area);
-        const auto take = simd::andMask(
-            simd::andMask(out.valid[k], simd::andMask(i0 != F(float(k)), i1 != F(float(k)))), size > best);
-        best = select(take, size, best), i2 = select(take, F(float(k)), i2);
-        orient = select(take, select(area < zero, F(-1.0f), one), orient);
+        areas[x] = eu * (out.v[k] - v0) - ev * (out.u[k] - u0);
+        offer(x, simd::andMask(out.valid[k], simd::andMask(i0 != F(float(k)), i1 != F(float(k)))), abs(areas[x]), none);
     }
+    firstLargest(none, i2);
+    for (int x = 0; x < usedCount; ++x)
+        orient = select(i2 == F(float(used[x])), select(areas[x] < zero, F(-1.0f), one), orient);
     F u2, v2;
     coordinatesOf(i2, u2, v2);
     const F tu[3] = {u0, u1, u2}, tv[3] = {v0, v1, v2};
-    F i3 = none;
-    best = F(-3.4e38f);
+    F i3;
+    const F lowest(-3.4e38f);
+    begin(lowest);
     for (int x = 0; x < usedCount; ++x) {
         const int k = used[x];
         F add(-3.4e38f);
@@ -378,9 +416,9 @@ template <class F>
             add = select(area > add, area, add);
         }
         const auto other = simd::andMask(i0 != F(float(k)), simd::andMask(i1 != F(float(k)), i2 != F(float(k))));
-        const auto take = simd::andMask(simd::andMask(out.valid[k], other), add > best);
-        best = select(take, add, best), i3 = select(take, F(float(k)), i3);
+        offer(x, simd::andMask(out.valid[k], other), add, lowest);
     }
+    firstLargest(lowest, i3);
     // Increasing order (a sorting network on the four).
     F sel[4] = {i0, i1, i2, i3};
     auto order = [&](int x, int y) {
