@@ -322,21 +322,21 @@ template <class F>
     // scan's compare-and-select chain through the running best was most of the clipping's time, so there the
     // candidates are set aside (independent per slot), then a running max, then the first slot that reaches it:
     // the same answer.
-    constexpr bool kLanes = !std::is_same_v<F, float>;
-    F candidate[kLanes ? kFaceSlots : 1];
+    constexpr bool kInLanes = !std::is_same_v<F, float>;
+    F candidate[kInLanes ? kFaceSlots : 1];
     const F none(-1.0f);
     F scanBest = zero, scanIndex = none;
     const auto begin = [&](const F& start) { scanBest = start, scanIndex = none; };
     // Invalid slots, and values that are not numbers, never win.
     const auto offer = [&](int x, MaskOf<F> eligible, const F& value, const F& start) {
-        if constexpr (kLanes) {
+        if constexpr (kInLanes) {
             candidate[x] = select(simd::andMask(eligible, value == value), value, start);
         } else if (eligible && value > scanBest) {
             scanBest = value, scanIndex = float(used[x]);
         }
     };
     const auto firstLargest = [&](const F& start, F& index) {
-        if constexpr (kLanes) {
+        if constexpr (kInLanes) {
             F best = start;
             for (int x = 0; x < usedCount; ++x) best = simd::max(best, candidate[x]);
             index = none;
