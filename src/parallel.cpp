@@ -15,6 +15,8 @@
 #include <tbb/task_arena.h>
 #endif
 
+#include "simd/float_mode.h"
+
 namespace rubble::detail {
 
 #if !RUBBLE_STD_THREADS
@@ -28,6 +30,8 @@ struct TaskPool::Arena {
             tbb::parallel_for(
                 tbb::blocked_range<std::size_t>(0, chunks, 1),
                 [&](const tbb::blocked_range<std::size_t>& r) {
+                    const simd::FlushSubnormals
+                        flushSubnormals;  // the engine's mode, on every thread (simd/float_mode.h)
                     const int worker = tbb::this_task_arena::current_thread_index();
                     for (std::size_t c = r.begin(); c != r.end(); ++c) chunk(c, worker);
                 },
@@ -70,6 +74,7 @@ struct TaskPool::Arena {
     }
 
     void drain(FunctionRef<void(std::size_t, int)> chunk, int worker) {
+        const simd::FlushSubnormals flushSubnormals;  // the engine's mode, on every thread (simd/float_mode.h)
         for (std::size_t c = next.fetch_add(1); c < jobChunks; c = next.fetch_add(1)) chunk(c, worker);
     }
 
@@ -112,6 +117,7 @@ void TaskPool::forChunks(std::size_t count, std::size_t chunkSize,
     const std::size_t chunks = chunkCount(count, chunkSize);
     if (chunks == 0) return;
     if (chunks == 1 || threads_ == 1) {
+        const simd::FlushSubnormals flushSubnormals;  // as every worker does, whoever calls
         for (std::size_t c = 0; c < chunks; ++c) fn(c, c * chunkSize, std::min(count, (c + 1) * chunkSize), 0);
         return;
     }

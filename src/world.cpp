@@ -8,6 +8,7 @@
 #include <string>
 
 #include "rubble/error.h"
+#include "simd/float_mode.h"
 #include "world_impl.h"
 
 namespace rubble {
@@ -555,6 +556,8 @@ void World::step(float dt) {
     if (!std::isfinite(dt) || dt <= 0)
         fail("World::step", "dt must be finite and > 0 (got " + std::to_string(dt) + ")");
     Impl& w = *impl_;
+    // The pool's workers set the same mode for each chunk they run (parallel.cpp).
+    const simd::FlushSubnormals flushSubnormals;
     const auto begin = detail::Clock::now();
     Profile& profile = w.profile;
     profile = Profile{};

@@ -43,3 +43,28 @@ TEST(Parallel, EmptyAndSingleChunkRunInline) {
     });
     EXPECT_EQ(calls, 1);
 }
+
+// Every chunk, on a worker or inline, runs with subnormal results flushed to zero (simd/float_mode.h), and the
+// caller's own mode is back when forChunks returns: half the smallest normal float is zero inside, not outside.
+TEST(Parallel, ChunksFlushSubnormalsAndTheCallerKeepsItsMode) {
+#if defined(__SSE__) || defined(__x86_64__)
+    const auto halfOfSmallestNormal = [] {
+        volatile float tiny = 1.17549435e-38f;  // volatile: computed at run time, under the current mode
+        return tiny * 0.5f;
+    };
+    ASSERT_NE(halfOfSmallestNormal(), 0.0f) << "the test expects the default mode (subnormals kept)";
+    for (int threads : {1, 2}) {
+        TaskPool pool(threads);
+        for (std::size_t chunks : {std::size_t{1}, std::size_t{64}}) {
+            std::atomic<int> kept{0};
+            pool.forChunks(chunks, 1, [&](std::size_t, std::size_t, std::size_t, int) {
+                if (halfOfSmallestNormal() != 0.0f) kept++;
+            });
+            EXPECT_EQ(kept.load(), 0) << threads << " threads, " << chunks << " chunks";
+            EXPECT_NE(halfOfSmallestNormal(), 0.0f) << "the caller's mode after forChunks";
+        }
+    }
+#else
+    GTEST_SKIP() << "x86 only";
+#endif
+}
