@@ -117,6 +117,31 @@ void BM_SortPairs(benchmark::State& state) {
     state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * n));
 }
 
+/// range(0): pairs; range(1): threads. Pair lists of a resting pile: five pairs per body on average, each body with
+/// neighbours a little above it in index, in the scrambled order a grid's rows emit them (the counting sort by first
+/// body; BM_SortPairs' million bodies take the radix sort).
+void BM_SortPairsFewPerBody(benchmark::State& state) {
+    const auto n = static_cast<std::size_t>(state.range(0));
+    TaskPool pool(static_cast<int>(state.range(1)));
+    std::mt19937 rng(3);
+    const auto bodies = static_cast<std::uint32_t>(n / 5);
+    std::uniform_int_distribution<std::uint32_t> first(0, bodies - 1), offset(1, 200);
+    std::vector<BodyPair> source(n), pairs;
+    for (auto& p : source) {
+        const std::uint32_t a = first(rng);
+        p = {a, a + offset(rng)};
+    }
+    RadixSortScratch scratch;
+    for (auto _ : state) {
+        state.PauseTiming();
+        pairs = source;
+        state.ResumeTiming();
+        sortPairs(pairs, pool, scratch);
+        benchmark::DoNotOptimize(pairs.data());
+    }
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * n));
+}
+
 }  // namespace
 
 BENCHMARK(BM_SweepAndPrune)->Apply(sapArgs)->Unit(benchmark::kMillisecond)->MinTime(0.2)->UseRealTime();
@@ -127,6 +152,11 @@ BENCHMARK(BM_RadixSortFloatKeys)
     ->UseRealTime();
 BENCHMARK(BM_SortPairs)
     ->ArgsProduct({{10'000, 100'000, 1'000'000}, {1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(0.2)
+    ->UseRealTime();
+BENCHMARK(BM_SortPairsFewPerBody)
+    ->ArgsProduct({{50'000, 500'000}, {1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->MinTime(0.2)
     ->UseRealTime();

@@ -12,7 +12,8 @@ namespace rubble::detail {
 
 namespace {
 
-constexpr std::size_t kBodyChunk = 16384;
+// Small enough that S2 (9,100 bodies) and S3 (4,000) split their key and gather passes across two workers.
+constexpr std::size_t kBodyChunk = 4096;
 // Cell coordinates are relative to the smallest centre and clamped to at most 20 bits (a million cells per axis),
 // fewer when the key and the body index would not fit one 64-bit word together (1M bodies: 13 bits). Clamping is
 // monotone and never moves two cells further apart, so neighbouring cells stay neighbours and no pair is lost; only

@@ -169,6 +169,65 @@ void radixSort(float* keys, std::uint32_t* values, std::size_t n, RadixSortScrat
     sortKeyValue(keys, values, n, scratch, pool, floatToSortableKey, sortableKeyToFloat);
 }
 
+namespace {
+
+// The counting sort by a keeps one counter per body per chunk; past this many bodies the radix sort is used.
+constexpr std::size_t kMaxPairBuckets = std::size_t{1} << 20;
+// A body's pairs are sorted by b by insertion up to this many, by std::sort beyond.
+constexpr std::size_t kInsertionSortPairsBelow = 32;
+// Bodies per chunk of the per-body sorts: depends only on the body count.
+constexpr std::size_t kBucketChunk = 2048;
+
+/// Stable counting sort by a (per-chunk counts, offsets digit-major and chunk-minor as in radixSortBits), then each
+/// body's pairs sorted by b: the result is the (a, b) order.
+void sortPairsByFirstBody(std::vector<BodyPair>& pairs, std::size_t bodies, std::size_t chunk, TaskPool& pool,
+                          RadixSortScratch& scratch) {
+    const std::size_t n = pairs.size();
+    const std::size_t chunks = TaskPool::chunkCount(n, chunk);
+    std::vector<std::uint32_t>& offsets = scratch.counts;
+    offsets.assign(chunks * bodies + bodies + 1, 0);
+    std::uint32_t* bodyStart = offsets.data() + chunks * bodies;
+    pool.forChunks(n, chunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
+        std::uint32_t* h = offsets.data() + c * bodies;
+        for (std::size_t i = begin; i < end; ++i) ++h[pairs[i].a];
+    });
+    std::uint32_t running = 0;
+    for (std::size_t a = 0; a < bodies; ++a) {
+        bodyStart[a] = running;
+        for (std::size_t c = 0; c < chunks; ++c) {
+            const std::uint32_t count = offsets[c * bodies + a];
+            offsets[c * bodies + a] = running;
+            running += count;
+        }
+    }
+    bodyStart[bodies] = running;
+    scratch.pairs.resize(n);
+    BodyPair* sorted = scratch.pairs.data();
+    pool.forChunks(n, chunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
+        std::uint32_t* next = offsets.data() + c * bodies;
+        for (std::size_t i = begin; i < end; ++i) sorted[next[pairs[i].a]++] = pairs[i];
+    });
+    pool.forChunks(bodies, kBucketChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t a = begin; a < end; ++a) {
+            BodyPair* first = sorted + bodyStart[a];
+            BodyPair* last = sorted + bodyStart[a + 1];
+            if (static_cast<std::size_t>(last - first) >= kInsertionSortPairsBelow) {
+                std::sort(first, last);
+            } else {
+                for (BodyPair* i = first + 1; i < last; ++i) {
+                    const BodyPair item = *i;
+                    BodyPair* j = i;
+                    for (; j > first && item.b < (j - 1)->b; --j) *j = *(j - 1);
+                    *j = item;
+                }
+            }
+            std::copy(first, last, pairs.data() + bodyStart[a]);
+        }
+    });
+}
+
+}  // namespace
+
 void sortPairs(std::vector<BodyPair>& pairs, TaskPool& pool, RadixSortScratch& scratch) {
     const std::size_t n = pairs.size();
     if (n < 2) return;
@@ -199,6 +258,13 @@ void sortPairs(std::vector<BodyPair>& pairs, TaskPool& pool, RadixSortScratch& s
         maxA = std::max(maxA, ci.maxA), maxB = std::max(maxB, ci.maxB), sorted &= ci.sorted;
     }
     if (sorted) return;
+    // Few bodies for the pairs (the usual case: a body has a handful of pairs): a counting sort by a, then each
+    // body's few pairs by b, two passes over the pairs instead of one per 8 key bits.
+    const std::size_t bodies = std::size_t{maxA} + 1;
+    if (bodies <= kMaxPairBuckets && chunks * bodies <= 2 * n + kMaxPairBuckets / 4) {
+        sortPairsByFirstBody(pairs, bodies, chunk, pool, scratch);
+        return;
+    }
 
     const int widthB = std::bit_width(maxB);
     const int keyBits = std::bit_width(maxA) + widthB;

@@ -36,6 +36,7 @@ struct RadixSortScratch {
     AlignedVector<std::uint64_t> items;   ///< packed input for the pair and BodyPair entry points
     AlignedVector<std::uint64_t> buffer;  ///< ping-pong target of the scatter passes
     std::vector<std::uint32_t> counts;    ///< per-chunk digit counts, then per-chunk scatter offsets
+    std::vector<BodyPair> pairs;          ///< sortPairs' counting sort by first body: the scattered pairs
 };
 
 /// Sorts items[0, n) by the bits [lowBit, lowBit + keyBits) of each item, stably; the other bits are payload.

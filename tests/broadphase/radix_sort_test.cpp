@@ -172,13 +172,18 @@ TEST(RadixSort, SameResultOnOneAndTwoThreads) {
         EXPECT_EQ(k1, k2);
         EXPECT_EQ(v1, v2);
 
-        std::vector<BodyPair> p1(n), p2;
-        for (std::size_t i = 0; i < n; ++i) p1[i] = {keys[i] % 50'000, keys[(i * 7) % n] % 50'000};
-        p2 = p1;
-        sortPairs(p1, one);
-        sortPairs(p2, two);
-        EXPECT_EQ(p1, p2);
-        EXPECT_TRUE(std::is_sorted(p1.begin(), p1.end()));
+        // 50,000 bodies take the radix sort, 5,000 the counting sort by first body (60 pairs each on average).
+        for (const std::uint32_t bodies : {50'000u, 5'000u}) {
+            std::vector<BodyPair> p1(n), p2;
+            for (std::size_t i = 0; i < n; ++i) p1[i] = {keys[i] % bodies, keys[(i * 7) % n] % 50'000};
+            p2 = p1;
+            std::vector<BodyPair> expected = p1;
+            std::sort(expected.begin(), expected.end());
+            sortPairs(p1, one);
+            sortPairs(p2, two);
+            EXPECT_EQ(p1, p2);
+            EXPECT_EQ(p1, expected);
+        }
     }
 }
 
