@@ -95,51 +95,46 @@ void BM_RadixSortFloatKeys(benchmark::State& state) {
     state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * n));
 }
 
+/// Times sortPairs on copies of `source` with state.range(1) threads.
+void timeSortPairs(benchmark::State& state, const std::vector<BodyPair>& source) {
+    TaskPool pool(static_cast<int>(state.range(1)));
+    std::vector<BodyPair> pairs;
+    RadixSortScratch scratch;
+    for (auto _ : state) {
+        state.PauseTiming();
+        pairs = source;
+        state.ResumeTiming();
+        sortPairs(pairs, pool, scratch);
+        benchmark::DoNotOptimize(pairs.data());
+    }
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * source.size()));
+}
+
 /// range(0): pairs; range(1): threads. Pair lists as the broad phase emits them (indices below 1M).
 void BM_SortPairs(benchmark::State& state) {
-    const auto n = static_cast<std::size_t>(state.range(0));
-    TaskPool pool(static_cast<int>(state.range(1)));
     std::mt19937 rng(2);
     std::uniform_int_distribution<std::uint32_t> d(0, 999'999);
-    std::vector<BodyPair> source(n), pairs;
+    std::vector<BodyPair> source(static_cast<std::size_t>(state.range(0)));
     for (auto& p : source) {
         const std::uint32_t a = d(rng), b = d(rng);
         p = {std::min(a, b), std::max(a, b)};
     }
-    RadixSortScratch scratch;
-    for (auto _ : state) {
-        state.PauseTiming();
-        pairs = source;
-        state.ResumeTiming();
-        sortPairs(pairs, pool, scratch);
-        benchmark::DoNotOptimize(pairs.data());
-    }
-    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * n));
+    timeSortPairs(state, source);
 }
 
 /// range(0): pairs; range(1): threads. Pair lists of a resting pile: five pairs per body on average, each body with
-/// neighbours a little above it in index, in the scrambled order a grid's rows emit them (the counting sort by first
-/// body; BM_SortPairs' million bodies take the radix sort).
+/// neighbours a little above it in index, in random order (the counting sort by first body; BM_SortPairs' million
+/// bodies take the radix sort).
 void BM_SortPairsFewPerBody(benchmark::State& state) {
-    const auto n = static_cast<std::size_t>(state.range(0));
-    TaskPool pool(static_cast<int>(state.range(1)));
     std::mt19937 rng(3);
-    const auto bodies = static_cast<std::uint32_t>(n / 5);
+    std::vector<BodyPair> source(static_cast<std::size_t>(state.range(0)));
+    const auto bodies = static_cast<std::uint32_t>(source.size() / 5);
     std::uniform_int_distribution<std::uint32_t> first(0, bodies - 1), offset(1, 200);
-    std::vector<BodyPair> source(n), pairs;
     for (auto& p : source) {
         const std::uint32_t a = first(rng);
         p = {a, a + offset(rng)};
     }
-    RadixSortScratch scratch;
-    for (auto _ : state) {
-        state.PauseTiming();
-        pairs = source;
-        state.ResumeTiming();
-        sortPairs(pairs, pool, scratch);
-        benchmark::DoNotOptimize(pairs.data());
-    }
-    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * n));
+    timeSortPairs(state, source);
 }
 
 }  // namespace
