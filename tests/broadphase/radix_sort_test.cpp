@@ -158,6 +158,21 @@ TEST(RadixSort, SortPairsCanonicalOrder) {
         }
 }
 
+// Pairs of a resting pile: a few per body, keys wider than three radix passes. They take the counting sort by first
+// body, each body's pairs then sorted by insertion (or std::sort for the one body given 40 pairs).
+TEST(RadixSort, SortPairsFewPerBodyCanonicalOrder) {
+    TaskPool pool(2);
+    std::mt19937 rng(17);
+    std::uniform_int_distribution<std::uint32_t> first(0, 4'999), second(0, 99'999);
+    std::vector<BodyPair> pairs(20'000);
+    for (auto& p : pairs) p = {first(rng), second(rng)};
+    for (std::size_t i = 0; i < 40; ++i) pairs[i * 97] = {1'234, second(rng)};
+    std::vector<BodyPair> expected = pairs;
+    std::sort(expected.begin(), expected.end());
+    sortPairs(pairs, pool);
+    EXPECT_EQ(pairs, expected);
+}
+
 TEST(RadixSort, SameResultOnOneAndTwoThreads) {
     TaskPool one(1), two(2);
     RadixSortScratch s1, s2;
