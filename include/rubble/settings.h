@@ -86,7 +86,9 @@ struct SolverSettings {
     /// from the ground up in which the lower body of each contact counts as immovable, so that every body ends the
     /// iterations supported by what is under it. Tall stacks stop sinking and rocking at a few iterations, for one
     /// serial pass over the contacts; what it costs is that loads no longer flow down within the pass. Baumgarte
-    /// and split impulses only: the soft step's springs, held from below, would take their softness twice.
+    /// and split impulses only: the soft step's springs, held from below, would take their softness twice. Not for
+    /// bodies resting on two or more others, as in a brick wall: what the iterations leave of their turning is held
+    /// level by level and grows with every row (S5 with it: the top row ends 140 m up after 200 steps).
     bool shockPropagation = false;
 };
 
