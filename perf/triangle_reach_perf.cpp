@@ -170,19 +170,31 @@ std::size_t triangleCount(const std::vector<BodyBatch>& bodies) {
     return n;
 }
 
+/// What the reach tests write, sized for the longest run of triangles (padded to whole SIMD batches).
+struct ReachOutputs {
+    std::unique_ptr<bool[]> inReach;
+    std::vector<BoxTriangleAxis> axes;
+
+    explicit ReachOutputs(const std::vector<BodyBatch>& bodies) {
+        std::size_t padded = 0;
+        for (const BodyBatch& b : bodies) padded = std::max(padded, triangleLanesPadded(b.count));
+        inReach = std::make_unique<bool[]>(padded);
+        axes.resize(padded);
+    }
+};
+
 void reach(benchmark::State& state, Body kind) {
     const std::vector<BodyBatch> bodies = makeBodies(kind);
     const bool wide = state.range(0) != 0;
-    std::size_t padded = 0;
-    for (const BodyBatch& b : bodies) padded = std::max(padded, triangleLanesPadded(b.count));
-    const auto inReach = std::make_unique<bool[]>(padded);
-    std::vector<BoxTriangleAxis> axes(padded);
+    ReachOutputs out(bodies);
+    bool* const inReach = out.inReach.get();
+    BoxTriangleAxis* const axes = out.axes.data();
     std::int64_t kept = 0;
     for (auto _ : state) {
         for (const BodyBatch& b : bodies) {
-            reachTests(kind, b, wide, inReach.get(), axes.data());
-            kept += std::count(inReach.get(), inReach.get() + b.count, true);
-            benchmark::DoNotOptimize(inReach.get());
+            reachTests(kind, b, wide, inReach, axes);
+            kept += std::count(inReach, inReach + b.count, true);
+            benchmark::DoNotOptimize(inReach);
         }
     }
     const auto n = static_cast<std::int64_t>(triangleCount(bodies));
@@ -194,17 +206,16 @@ void reach(benchmark::State& state, Body kind) {
 void runs(benchmark::State& state, Body kind) {
     const std::vector<BodyBatch> bodies = makeBodies(kind);
     const bool filtered = state.range(0) != 0;
-    std::size_t padded = 0;
-    for (const BodyBatch& b : bodies) padded = std::max(padded, triangleLanesPadded(b.count));
-    const auto inReach = std::make_unique<bool[]>(padded);
-    std::vector<BoxTriangleAxis> axes(padded);
+    ReachOutputs out(bodies);
+    bool* const inReach = out.inReach.get();
+    BoxTriangleAxis* const axes = out.axes.data();
     std::int64_t manifolds = 0;
     for (auto _ : state) {
         for (const BodyBatch& b : bodies) {
             if (filtered)
-                reachTests(kind, b, true, inReach.get(), axes.data());
+                reachTests(kind, b, true, inReach, axes);
             else
-                std::fill(inReach.get(), inReach.get() + b.count, true);
+                std::fill(inReach, inReach + b.count, true);
             for (std::size_t k = 0; k < b.count; ++k) {
                 if (!inReach[k]) continue;
                 Manifold m;

@@ -30,8 +30,8 @@ struct TaskPool::Arena {
             tbb::parallel_for(
                 tbb::blocked_range<std::size_t>(0, chunks, 1),
                 [&](const tbb::blocked_range<std::size_t>& r) {
-                    const simd::FlushSubnormals
-                        flushSubnormals;  // the engine's mode, on every thread (simd/float_mode.h)
+                    // The engine's float mode, on every thread (simd/float_mode.h).
+                    const simd::FlushSubnormals flushSubnormals;
                     const int worker = tbb::this_task_arena::current_thread_index();
                     for (std::size_t c = r.begin(); c != r.end(); ++c) chunk(c, worker);
                 },

@@ -87,6 +87,14 @@ void check(const Batch& batch, Kernel kernel, Tally& tally, int body) {
     }
 }
 
+/// Enough contacts to mean something, a good share of the triangles rejected (or the tests would not be worth running),
+/// and, the tests being exact distances with a small slack, almost everything kept touching.
+void expectManyContactsAndWorthwhileRejections(const Tally& tally) {
+    EXPECT_GT(tally.contacts, 10000);
+    EXPECT_GT(tally.rejected, tally.kept / 4);
+    EXPECT_LT(tally.kept - tally.contacts, tally.kept / 50);
+}
+
 // The wide tests may never reject a triangle that the exact kernel gives a contact (they are necessary conditions
 // with a slack of 1e-3 of the reach plus 1e-5 of the coordinates), and must agree exactly with their scalar form
 // (the same template over float). They must also reject a good share of the triangles, or they would not be worth
@@ -108,10 +116,7 @@ TEST(TriangleReach, SphereNeverRejectsAContactAndMatchesScalar) {
             },
             tally, body);
     }
-    EXPECT_GT(tally.contacts, 10000);
-    EXPECT_GT(tally.rejected, tally.kept / 4);
-    // Exact distance with a small slack: almost everything kept touches.
-    EXPECT_LT(tally.kept - tally.contacts, tally.kept / 50);
+    expectManyContactsAndWorthwhileRejections(tally);
 }
 
 TEST(TriangleReach, CapsuleNeverRejectsAContactAndMatchesScalar) {
@@ -141,9 +146,7 @@ TEST(TriangleReach, CapsuleNeverRejectsAContactAndMatchesScalar) {
             EXPECT_EQ(std::memcmp(&full, &told, sizeof full), 0) << body << " " << k;
         }
     }
-    EXPECT_GT(tally.contacts, 10000);
-    EXPECT_GT(tally.rejected, tally.kept / 4);
-    EXPECT_LT(tally.kept - tally.contacts, tally.kept / 50);
+    expectManyContactsAndWorthwhileRejections(tally);
 }
 
 bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
