@@ -29,13 +29,13 @@ class RestingLoads {
 public:
     /// Writes normal impulses for the touching points of every manifold that carried nothing from last step
     /// (`carried[m] == 0`) and through which a dynamic body rests on something lower, along gravity. Other
-    /// manifolds keep their impulses and count as they are for the loads they pass down. Serial, in manifold order;
-    /// it visits only the bodies that rest on a new contact. Returns the number of manifolds it wrote.
+    /// manifolds keep their impulses and count as they are for the loads they pass down. Serial: two scans of the
+    /// manifolds, then only the bodies that rest on a new contact, top down. Returns the number of manifolds it wrote.
     std::uint32_t seed(const Contacts& contacts, std::span<const std::uint8_t> carried, const MovingBodies& bodies,
                        const RestingLoadParams& params, std::vector<PointImpulse>& impulses);
 
 private:
-    /// A manifold through which `upper` rests on `lower` (kFixed: a static or kinematic body).
+    /// A manifold through which `upper` rests on `lower` (~0u: a static or kinematic body), both dense indices.
     struct Support {
         std::uint32_t manifold;
         std::uint32_t upper;
@@ -43,9 +43,9 @@ private:
         bool upperIsB;
     };
     struct Link {
-        std::uint32_t body;  ///< index into resting_
-        std::uint32_t support;
-        bool above;  ///< the body is the support's lower side (the load comes from above)
+        std::uint32_t body;     ///< index into resting_
+        std::uint32_t support;  ///< index into supports_
+        bool above;             ///< the body is the support's lower side (the load comes from above)
     };
     std::vector<std::uint32_t> restingOf_;  ///< per moving body: index into resting_, or ~0u
     std::vector<std::uint32_t> resting_;    ///< bodies resting on a new contact, top down
