@@ -626,8 +626,11 @@ void World::step(float dt) {
             profile.meshTriangles = static_cast<std::uint32_t>(w.pairs.meshTriangles.size());
             {
                 detail::StageTimer timer(profile, Stage::NarrowPhase, w.origin);
-                w.narrowPhase.run(w.pairs, w.bodies, w.shapes, {w.settings.contactMargin, dt}, *w.pool, w.contacts);
+                w.narrowPhase.run(w.pairs, w.bodies, w.shapes,
+                                  {w.settings.contactMargin, dt, w.settings.manifoldReuseDistance}, *w.pool,
+                                  w.contacts);
             }
+            profile.reusedManifolds = w.narrowPhase.reusedManifolds();
             profile.manifolds = static_cast<std::uint32_t>(w.contacts.manifolds.size());
             profile.contactPoints = w.contacts.pointCount;
             {
@@ -756,6 +759,7 @@ void World::setSettings(const WorldSettings& s) {
     requireFinite(kWhere, "settings.gravity", s.gravity);
     requireFinite(kWhere, "settings.timeStep", s.timeStep);
     requireNonNegative(kWhere, "settings.contactMargin", s.contactMargin);
+    requireNonNegative(kWhere, "settings.manifoldReuseDistance", s.manifoldReuseDistance);
     if (s.timeStep <= 0) fail(kWhere, "settings.timeStep must be > 0 (got " + std::to_string(s.timeStep) + ")");
     if (s.substeps < 1 || s.substeps > 64)
         fail(kWhere, "settings.substeps must be in [1, 64] (got " + std::to_string(s.substeps) + ")");

@@ -184,7 +184,7 @@ TEST(SceneLoader, SemanticErrorsBuiltInTest) {
 TEST(SceneLoader, SolverKnobsReachTheSettings) {
     const Scene s = parseScene(R"({"settings": {"position_correction": "soft_step", "contact_hertz": 45,
         "contact_damping_ratio": 2, "max_push_out_velocity": 1.5, "baumgarte": 0.1, "linear_slop": 0.001,
-        "shock_propagation": true, "seed_resting_loads": false}})",
+        "shock_propagation": true, "seed_resting_loads": false, "manifold_reuse_distance": 0.002}})",
                                "knobs.json");
     const SolverSettings& solver = s.settings.solver;
     EXPECT_EQ(solver.positionCorrection, PositionCorrection::SoftStep);
@@ -195,6 +195,9 @@ TEST(SceneLoader, SolverKnobsReachTheSettings) {
     EXPECT_FLOAT_EQ(solver.linearSlop, 0.001f);
     EXPECT_TRUE(solver.shockPropagation);
     EXPECT_FALSE(solver.seedRestingLoads);
+    EXPECT_FLOAT_EQ(s.settings.manifoldReuseDistance, 0.002f);
+    expectAll(errorOf([] { parseScene(R"({"settings": {"manifold_reuse_distance": -1}})", "r.json"); }),
+              {"r.json", "/settings/manifold_reuse_distance"});
     expectAll(errorOf([] { parseScene(R"({"settings": {"contact_hertz": 0}})", "h.json"); }),
               {"h.json", "/settings/contact_hertz"});
     expectAll(errorOf([] { parseScene(R"({"settings": {"linear_slop": -0.01}})", "s.json"); }),

@@ -130,6 +130,9 @@ TEST(WorldValidation, RefusesBadCallsOnBodies) {
     WorldSettings bad;
     bad.substeps = 0;
     EXPECT_NE(errorOf([&] { world.setSettings(bad); }).find("substeps must be in [1, 64]"), std::string::npos);
+    WorldSettings badReuse;
+    badReuse.manifoldReuseDistance = kNaN;
+    EXPECT_NE(errorOf([&] { world.setSettings(badReuse); }).find("settings.manifoldReuseDistance"), std::string::npos);
     EXPECT_NE(errorOf([&] { World w(WorldSettings{.threads = -2}); }).find("threads"), std::string::npos);
 }
 

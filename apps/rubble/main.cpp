@@ -264,8 +264,9 @@ int run(const Options& options) {
                         ? "did not run"
                         : std::string(rubble::broadPhaseName(last.broadPhase)).c_str(),
                     last.movingPairs, last.staticPairs, last.meshPairs, last.meshTriangles);
-        std::printf("narrow     %u manifolds, %u contact points", last.manifolds, last.contactPoints);
-        std::printf("\n");
+        std::printf("narrow     %u manifolds, %u contact points; %u manifolds reused (pairs moved < %g mm)\n",
+                    last.manifolds, last.contactPoints, last.reusedManifolds,
+                    1000.0 * scene.settings.manifoldReuseDistance);
         std::printf(
             "cache      %u of %u manifolds continue last step's, %u of %u points warm-started; %u new ones started "
             "from resting loads\n",

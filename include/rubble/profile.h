@@ -47,6 +47,7 @@ struct Profile {
     std::uint32_t meshTriangles = 0;  ///< triangles handed over with the mesh pairs
     std::uint32_t manifolds = 0;      ///< contact manifolds (touching or speculative pairs)
     std::uint32_t contactPoints = 0;
+    std::uint32_t reusedManifolds = 0;    ///< manifolds moved with their bodies rather than computed again
     std::uint32_t matchedManifolds = 0;   ///< manifolds that continue one of the previous step (same pair and parts)
     std::uint32_t warmStartedPoints = 0;  ///< points whose feature matched: they start from last step's impulses
     std::uint32_t seededManifolds = 0;    ///< new manifolds started from the loads that hold their bodies at rest

@@ -94,6 +94,19 @@ struct Posed {
     return {{apply(body.pose, c.local.position), body.pose.rotation * c.local.rotation}, c.shape.get()};
 }
 
+/// The shape of one side of a pair (the compound child it names).
+const Shape& sideShape(const BodyStorage& storage, const std::vector<Shape>& shapes, const ContactPair& p, bool sideB) {
+    const std::uint32_t i = sideB ? p.b : p.a;
+    const Shape& body = shapes[(sideB ? p.bStatic : p.aStatic) ? storage.statics.shape[i] : storage.moving.shape[i]];
+    const std::uint16_t child = sideB ? p.childB : p.childA;
+    return child == kNoChild ? body : *body.children[child].shape;
+}
+
+/// How far a shape's surface lies beyond its core: a sphere's or capsule's radius, 0 for polytopes and triangles.
+float roundingOf(const Shape& shape) {
+    return shape.kind == ShapeKind::Sphere || shape.kind == ShapeKind::Capsule ? shape.radius : 0.0f;
+}
+
 CapsuleSegment segmentOf(const Posed& p) { return capsuleSegmentOf(p.pose, p.shape->halfHeight, p.shape->radius); }
 
 /// A body against a static mesh or heightfield: what all its triangle jobs (which come in a row) share, worked out
@@ -292,7 +305,9 @@ void collideTriangles(const NarrowPhaseStage::Job& job, const std::uint32_t* tri
     const ContactPair& pair = chunk.jobs[j].pair;
     for (std::size_t ahead = 1; ahead <= 2 && j + ahead < chunk.jobs.size(); ++ahead) {
         const NarrowPhaseStage::Job& next = chunk.jobs[j + ahead];
-        if (next.triangles == 0 || next.pair.b != pair.b || !next.pair.bStatic) return;
+        if (next.triangles == 0 || next.reuse != NarrowPhaseStage::kNoReuse || next.pair.b != pair.b ||
+            !next.pair.bStatic)
+            return;
         for (std::uint32_t k = 0; k < next.triangles; ++k) {
             const std::uint32_t* triangle = indices + 3 * std::size_t(meshTriangles[next.firstTriangle + k]);
             if (ahead == 2) {
@@ -313,6 +328,17 @@ F speculativeMargin(const NarrowPhaseParams& params, const Vec3W<F>& vA, const V
     const F turnA = simd::min(simd::length(wA) * dt, two) * reachA;
     const F turnB = simd::min(simd::length(wB) * dt, two) * reachB;
     return F(params.margin) + simd::length(vB - vA) * dt + turnA + turnB;
+}
+
+/// Whether a pair's manifolds are worth keeping for reuse: not those of the kernels that run in SIMD lanes (sphere,
+/// capsule and box pairs but capsule-box), which cost less than a lookup and a copy.
+bool worthReusing(ShapeKind first, ShapeKind second) {
+    const auto batched = [](ShapeKind k) {
+        return k == ShapeKind::Sphere || k == ShapeKind::Capsule || k == ShapeKind::Box;
+    };
+    const bool capsuleBox = (first == ShapeKind::Capsule && second == ShapeKind::Box) ||
+                            (first == ShapeKind::Box && second == ShapeKind::Capsule);
+    return capsuleBox || !(batched(first) && batched(second));
 }
 
 /// What bounds the approach of one side of a pair: its velocities and the reach of its shape (zero for statics).
@@ -599,10 +625,98 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
     const std::size_t units = movingCount + staticCount + candidates.meshTriangles.size();
     const std::size_t chunkCount = TaskPool::chunkCount(units, kChunk);
     if (chunks_.size() < chunkCount) chunks_.resize(chunkCount);
+    const bool reuse = params.reuseDistance > 0;
+    if (reuse)
+        reuse_.begin(chunkCount);
+    else
+        reuse_.clear();
 
     pool.forChunks(units, kChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int worker) {
         Chunk& chunk = chunks_[c];
         chunk.jobs.clear();
+        chunk.reuses.clear();
+        chunk.pending.clear();
+        ManifoldReuse::ChunkCache* cache = reuse ? &reuse_.current(c) : nullptr;
+        ManifoldReuse::Finder finder(reuse_);
+        // A candidate whose kernels cost more than a lookup: its manifolds again if its bodies have hardly moved
+        // (true: its jobs are made), else an entry that takes this step's manifolds (pending until they are made).
+        auto reuseOrKeep = [&](ManifoldReuse::Section section, std::uint32_t first, std::uint32_t second,
+                               bool secondStatic) {
+            const MovingBodies& m = storage.moving;
+            const StaticBodies& st = storage.statics;
+            const std::uint32_t shape1 = m.shape[first], shape2 = secondStatic ? st.shape[second] : m.shape[second];
+            if (!worthReusing(tables_.kind[shape1], tables_.kind[shape2])) return false;
+            const std::uint32_t slot1 = m.slot[first], slot2 = secondStatic ? st.slot[second] : m.slot[second];
+            const auto& slots = storage.slots();
+            ManifoldReuse::Entry now;
+            now.order =
+                ManifoldReuse::orderOf(section, first, section == ManifoldReuse::Section::Moving ? second : slot2);
+            now.slots = (std::uint64_t{slot1} << 32) | slot2;
+            now.generations = (std::uint64_t{slots[slot1].generation} << 32) | slots[slot2].generation;
+            now.shapeFirst = shape1, now.shapeSecond = shape2;
+            now.first = {{m.px[first], m.py[first], m.pz[first]}, {m.qx[first], m.qy[first], m.qz[first], m.qw[first]}};
+            if (secondStatic)
+                now.second = {{st.px[second], st.py[second], st.pz[second]},
+                              {st.qx[second], st.qy[second], st.qz[second], st.qw[second]}};
+            else
+                now.second = {{m.px[second], m.py[second], m.pz[second]},
+                              {m.qx[second], m.qy[second], m.qz[second], m.qw[second]}};
+            const ContactPair asPair{first, second, false, secondStatic};
+            const Motion<float> motion1 = motionOf(storage, tables_, asPair, false);
+            const Motion<float> motion2 = motionOf(storage, tables_, asPair, true);
+            now.margin = speculativeMargin<float>(params, motion1.v, motion1.w, motion1.reach, motion2.v, motion2.w,
+                                                  motion2.reach);
+            const ManifoldReuse::Finder::Found found = finder.find(now.order);
+            if (found.entry != nullptr && found.entry->slots == now.slots &&
+                found.entry->generations == now.generations && found.entry->shapeFirst == shape1 &&
+                found.entry->shapeSecond == shape2) {
+                const ManifoldReuse::Entry& then = *found.entry;
+                const PoseChange change1 = poseChange(then.first, now.first);
+                const PoseChange change2 = poseChange(then.second, now.second);
+                const float moved = relativeDisplacement(change1, change2, tables_.reach[shape1]);
+                // Points the old margin left out were further apart than it, and can have closed by `moved`
+                // since: the surfaces must not be able to close the rest in this step.
+                if (moved <= params.reuseDistance && now.margin - params.margin + moved < then.margin) {
+                    ManifoldReuse::Entry kept = then;
+                    kept.order = now.order;
+                    kept.firstStored = static_cast<std::uint32_t>(cache->stored.size());
+                    cache->stored.insert(cache->stored.end(), found.stored, found.stored + then.storedCount);
+                    cache->entries.push_back(kept);
+                    if (then.storedCount == 0) return true;
+                    Job job;
+                    job.kernel = PairKernel::Count;
+                    if (section == ManifoldReuse::Section::Mesh) {
+                        const ManifoldReuse::Stored& s = *found.stored;
+                        job.pair = {first, second, false, true, s.triangle, s.childA, s.childB};
+                        job.triangles = then.storedCount;
+                        job.reuse = static_cast<std::uint32_t>(chunk.reuses.size());
+                        chunk.reuses.push_back({change1, change2, kept.firstStored, then.storedCount});
+                        chunk.jobs.push_back(job);
+                        return true;
+                    }
+                    for (std::uint32_t k = 0; k < then.storedCount; ++k) {
+                        const ManifoldReuse::Stored& s = found.stored[k];
+                        job.pair =
+                            s.swapped ? ContactPair{second, first, secondStatic, false, s.triangle, s.childA, s.childB}
+                                      : ContactPair{first, second, false, secondStatic, s.triangle, s.childA, s.childB};
+                        job.reuse = static_cast<std::uint32_t>(chunk.reuses.size());
+                        chunk.reuses.push_back(s.swapped ? Reuse{change2, change1, kept.firstStored + k, 1}
+                                                         : Reuse{change1, change2, kept.firstStored + k, 1});
+                        chunk.jobs.push_back(job);
+                    }
+                    return true;
+                }
+            }
+            const auto jobsNow = static_cast<std::uint32_t>(chunk.jobs.size());
+            chunk.pending.push_back({static_cast<std::uint32_t>(cache->entries.size()), first, jobsNow, jobsNow});
+            cache->entries.push_back(now);
+            return false;
+        };
+        // Closes the pending entry reuseOrKeep opened for the candidate whose jobs were just made.
+        auto closePending = [&](std::size_t pendingBefore) {
+            if (chunk.pending.size() > pendingBefore)
+                chunk.pending.back().jobEnd = static_cast<std::uint32_t>(chunk.jobs.size());
+        };
         // A is the body whose shape kind is lower, so each kernel sees its shapes in its own argument order.
         // Compounds expand into one job per child (per child pair for two compounds), in child order.
         // `run`: for a body against a mesh, the index of its triangle in meshTriangles (a run of one); else ~0u.
@@ -648,11 +762,19 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
                     chunk.jobs.push_back(job);
                 }
         };
-        for (std::size_t u = begin; u < std::min(end, movingCount); ++u)
-            addJob(candidates.moving[u].a, false, candidates.moving[u].b, false, ~0u);
+        for (std::size_t u = begin; u < std::min(end, movingCount); ++u) {
+            const BodyPair& p = candidates.moving[u];
+            const std::size_t pendingBefore = chunk.pending.size();
+            if (reuse && reuseOrKeep(ManifoldReuse::Section::Moving, p.a, p.b, false)) continue;
+            addJob(p.a, false, p.b, false, ~0u);
+            closePending(pendingBefore);
+        }
         for (std::size_t u = std::max(begin, movingCount); u < std::min(end, movingCount + staticCount); ++u) {
             const BodyPair& p = candidates.statics[u - movingCount];
+            const std::size_t pendingBefore = chunk.pending.size();
+            if (reuse && reuseOrKeep(ManifoldReuse::Section::Static, p.a, p.b, true)) continue;
             addJob(p.a, false, p.b, true, ~0u);
+            closePending(pendingBefore);
         }
         // A body against a mesh (always B): one job per run of its triangles in the chunk. Mesh pairs hold
         // consecutive runs of meshTriangles, so the pair of the chunk's first triangle is found once and then
@@ -667,29 +789,43 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             for (auto t = first; t < last; ++mesh) {
                 const std::uint32_t runEnd = std::min(last, mesh->firstTriangle + mesh->triangleCount);
                 if (t >= runEnd) continue;
+                // Only a run that lies whole in the chunk is reused or kept: every chunk it spans decides alike.
+                const bool whole = t == mesh->firstTriangle && runEnd == mesh->firstTriangle + mesh->triangleCount;
+                const std::size_t pendingBefore = chunk.pending.size();
+                if (reuse && whole && reuseOrKeep(ManifoldReuse::Section::Mesh, mesh->moving, mesh->staticBody, true)) {
+                    t = runEnd;
+                    continue;
+                }
                 // The body's job for its first triangle here grows to the rest of its run (a compound body makes
                 // one job per child and triangle, in that order, so it goes through addJob for every triangle).
                 const std::size_t at = chunk.jobs.size();
                 addJob(mesh->moving, false, mesh->staticBody, true, t);
                 if (chunk.jobs.size() != at + 1 || chunk.jobs[at].pair.childA != kNoChild) {
                     for (++t; t < runEnd; ++t) addJob(mesh->moving, false, mesh->staticBody, true, t);
+                    closePending(pendingBefore);
                     continue;
                 }
                 chunk.jobs[at].triangles = runEnd - t;
                 t = runEnd;
+                closePending(pendingBefore);
             }
         }
-        runChunk(chunk, *scratch_[static_cast<std::size_t>(worker)], storage, shapes, candidates.meshTriangles, params);
+        runChunk(chunk, *scratch_[static_cast<std::size_t>(worker)], storage, shapes, candidates.meshTriangles, params,
+                 cache);
+        if (cache) keepComputed(chunk, *cache, storage, shapes);
     });
 
     // Each chunk's touching jobs go to the output at the offset its predecessors leave: canonical order on any
     // number of threads, one copy per manifold, and no output element constructed only to be overwritten.
+    if (reuse) reuse_.finish();
     std::size_t total = 0;
     std::uint32_t points = 0;
+    reusedManifolds_ = 0;
     for (std::size_t c = 0; c < chunkCount; ++c) {
         chunks_[c].offset = total;
         total += chunks_[c].touching;
         points += chunks_[c].points;
+        reusedManifolds_ += chunks_[c].reused;
     }
     out.pairs.resize(total);
     out.manifolds.resize(total);
@@ -714,18 +850,36 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
 
 void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorage& storage,
                                 const std::vector<Shape>& shapes, const std::vector<std::uint32_t>& meshTriangles,
-                                const NarrowPhaseParams& params) const {
+                                const NarrowPhaseParams& params, const ManifoldReuse::ChunkCache* cache) const {
     const std::size_t n = chunk.jobs.size();
     if (chunk.manifolds.size() < n) chunk.manifolds.resize(n);
     chunk.meshPairs.clear();
     chunk.meshManifolds.clear();
+    std::uint32_t reused = 0;
     for (auto& list : scratch.batched) list.clear();
     // Pairs with a batched kernel are collected for it; every other pair runs here, one at a time, with its own
     // speculative margin. A body on a mesh is one job per triangle, all in a row: they run together
     // (collideTriangles), their poses and margin worked out once.
     MeshSide mesh;
     for (std::uint32_t j = 0; j < n; ++j) {
-        const Job& job = chunk.jobs[j];
+        Job& job = chunk.jobs[j];
+        if (job.reuse != kNoReuse) {
+            const Reuse& r = chunk.reuses[job.reuse];
+            const ManifoldReuse::Stored* stored = cache->stored.data() + r.firstStored;
+            reused += r.count;
+            if (job.triangles == 0) {
+                moveManifold(stored->manifold, r.a, r.b, stored->radiusA, stored->radiusB, chunk.manifolds[j]);
+                continue;
+            }
+            for (std::uint32_t k = 0; k < r.count; ++k) {
+                ContactPair pair = job.pair;
+                pair.triangle = stored[k].triangle, pair.childA = stored[k].childA, pair.childB = stored[k].childB;
+                chunk.meshPairs.push_back(pair);
+                moveManifold(stored[k].manifold, r.a, r.b, stored[k].radiusA, stored[k].radiusB,
+                             chunk.meshManifolds.emplace_back());
+            }
+            continue;
+        }
         Batched batched = Batched::Count;
         switch (job.kernel) {
             case PairKernel::SphereSphere:
@@ -763,8 +917,10 @@ void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorag
         }
         mesh.prepare(a, b);
         prefetchTriangles(chunk, j, meshTriangles, mesh);
+        job.firstOutput = static_cast<std::uint32_t>(chunk.meshPairs.size());
         collideTriangles(job, meshTriangles.data() + job.firstTriangle, a, mesh, margin, hullAdjacency_, chunk,
                          scratch);
+        job.outputCount = static_cast<std::uint32_t>(chunk.meshPairs.size()) - job.firstOutput;
     }
     for (int kernel = 0; kernel < static_cast<int>(Batched::Count); ++kernel)
         if (!scratch.batched[kernel].empty())
@@ -781,6 +937,33 @@ void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorag
     for (const Manifold& m : chunk.meshManifolds) points += static_cast<std::uint32_t>(m.pointCount);
     chunk.touching = touching;
     chunk.points = points;
+    chunk.reused = reused;
+}
+
+void NarrowPhaseStage::keepComputed(Chunk& chunk, ManifoldReuse::ChunkCache& cache, const BodyStorage& storage,
+                                    const std::vector<Shape>& shapes) {
+    auto keep = [&](const Manifold& m, const ContactPair& pair, bool swapped) {
+        ManifoldReuse::Stored& s = cache.stored.emplace_back();
+        s.manifold = m;
+        s.radiusA = roundingOf(sideShape(storage, shapes, pair, false));
+        s.radiusB = roundingOf(sideShape(storage, shapes, pair, true));
+        s.triangle = pair.triangle, s.childA = pair.childA, s.childB = pair.childB, s.swapped = swapped;
+    };
+    for (const PendingEntry& p : chunk.pending) {
+        ManifoldReuse::Entry& entry = cache.entries[p.entry];
+        entry.firstStored = static_cast<std::uint32_t>(cache.stored.size());
+        for (std::uint32_t j = p.jobBegin; j < p.jobEnd; ++j) {
+            const Job& job = chunk.jobs[j];
+            if (job.triangles == 0) {
+                if (chunk.manifolds[j].pointCount > 0)
+                    keep(chunk.manifolds[j], job.pair, job.pair.aStatic || job.pair.a != p.firstBody);
+                continue;
+            }
+            for (std::uint32_t k = job.firstOutput; k < job.firstOutput + job.outputCount; ++k)
+                keep(chunk.meshManifolds[k], chunk.meshPairs[k], false);
+        }
+        entry.storedCount = static_cast<std::uint32_t>(cache.stored.size()) - entry.firstStored;
+    }
 }
 
 }  // namespace rubble::detail

@@ -532,11 +532,29 @@ struct Builder {
 
 void Builder::parseSettings(const Json& j, const Loc& at) {
     expectObject(j, at);
-    checkKeys(
-        j, at,
-        {"dt", "gravity", "substeps", "velocity_iterations", "position_iterations", "threads", "integrator", "effects",
-         "broadphase", "position_correction", "warm_starting", "seed_resting_loads", "shock_propagation", "sleep",
-         "contact_hertz", "contact_damping_ratio", "max_push_out_velocity", "baumgarte", "linear_slop"});
+    // clang-format off (it would put one key per line)
+    checkKeys(j, at,
+              {"dt",
+               "gravity",
+               "substeps",
+               "velocity_iterations",
+               "position_iterations",
+               "threads",
+               "integrator",
+               "effects",
+               "broadphase",
+               "position_correction",
+               "warm_starting",
+               "seed_resting_loads",
+               "shock_propagation",
+               "sleep",
+               "contact_hertz",
+               "contact_damping_ratio",
+               "max_push_out_velocity",
+               "baumgarte",
+               "linear_slop",
+               "manifold_reuse_distance"});
+    // clang-format on
     WorldSettings& s = scene.settings;
     if (j.contains("dt")) s.timeStep = getFloat(j["dt"], at / "dt", Sign::Positive);
     if (j.contains("gravity")) s.gravity = getVec3(j["gravity"], at / "gravity");
@@ -584,6 +602,7 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
     solverFloat("max_push_out_velocity", s.solver.maxPushOutVelocity, Sign::NonNegative);
     solverFloat("baumgarte", s.solver.baumgarte, Sign::NonNegative);
     solverFloat("linear_slop", s.solver.linearSlop, Sign::NonNegative);
+    solverFloat("manifold_reuse_distance", s.manifoldReuseDistance, Sign::NonNegative);
     if (j.contains("sleep")) {
         const Loc sl = at / "sleep";
         const Json& o = expectObject(j["sleep"], sl, "a sleep settings object");

@@ -1,0 +1,138 @@
+#pragma once
+// Manifold reuse: a pair whose bodies have hardly moved relative to each other since its manifolds were computed gets
+// those manifolds again, carried along with its bodies, instead of running its kernels. Jolt's body pair cache does
+// the same for pairs that moved less than 1 mm and turned less than 2 degrees; here the test is one bound on how far
+// any point of the first body's shape has moved relative to the second body, so a long body that turns a little is
+// not taken for still. The carried manifolds keep their feature ids (the contact cache warm-starts them exactly), their
+// points ride on body B (where the kernels put them), their normal turns with B, and each depth follows the relative
+// motion of the bodies at that point along the normal: exact to first order in the motion, so a resting pair's depth
+// does not freeze while the solver moves its bodies.
+//
+// The stage keeps, per parallel chunk of candidates, an entry for every candidate whose kernels are dearer than the
+// lookup (not the closed-form sphere and capsule pairs): the bodies' poses and the speculative margin when its
+// manifolds were computed, and those manifolds. A reused entry is copied forward unchanged, so the motion is always
+// measured from the step that computed it and the manifolds are computed again once it adds up to the tolerance.
+#include <cstdint>
+#include <vector>
+
+#include "narrowphase/manifold.h"
+#include "rubble/math.h"
+
+namespace rubble::detail {
+
+/// Pose of a body as the stage reads it: centre of mass and orientation of a moving body, origin and orientation of a
+/// static one.
+struct BodyPose {
+    Vec3 position;
+    Quat rotation;
+};
+
+/// The rigid motion of a body from one pose to another: a point w fixed on the body goes to to + turn (w - from).
+/// Written about the body's own point, not the world origin, so that it keeps its precision far from the origin.
+struct PoseChange {
+    Vec3 from, to;
+    Quat turn;
+};
+
+inline PoseChange poseChange(const BodyPose& then, const BodyPose& now) {
+    return {then.position, now.position, now.rotation * conjugate(then.rotation)};
+}
+inline Vec3 carry(const PoseChange& c, Vec3 w) { return c.to + rotate(c.turn, w - c.from); }
+
+/// A bound on how far any point within `reachA` of body A's reference point has moved relative to body B, given both
+/// bodies' motions: the motion at A's point, plus reachA times the angle between the two turns (2 sin of half of
+/// it, from the vector part of their quotient, which keeps its precision at small angles).
+inline float relativeDisplacement(const PoseChange& a, const PoseChange& b, float reachA) {
+    const Vec3 atPoint = a.to - b.to - rotate(b.turn, a.from - b.from);
+    const Quat between = conjugate(b.turn) * a.turn;
+    return length(atPoint) + 2.0f * reachA * length(Vec3{between.x, between.y, between.z});
+}
+
+/// A manifold computed between A and B, moved with them. Each side is followed at its core (a sphere's centre, a
+/// capsule's segment; a polytope's surface), `radiusA` and `radiusB` being the roundings: a spinning sphere's
+/// surface does not move, though its material points do. The point (on B's surface) is carried with B's core, the
+/// normal turns with B, and the depth is the rounding less the cores' separation along the new normal, which is
+/// exact when the pair moves as one rigid body and right to first order otherwise. Everything is formed relative to
+/// the bodies' own points, so that bodies far from the origin keep their depths' precision.
+inline void moveManifold(const Manifold& then, const PoseChange& a, const PoseChange& b, float radiusA, float radiusB,
+                         Manifold& now) {
+    const Vec3 n = then.normal;
+    now.normal = rotate(b.turn, n);
+    now.pointCount = then.pointCount;
+    const Vec3 between = a.to - b.to;
+    for (int i = 0; i < then.pointCount; ++i) {
+        const ContactPoint& p = then.points[i];
+        // B lies along +n from the point; A's surface point is `depth` further on, its core `radiusA` back.
+        const Vec3 coreA = (p.position - a.from) + n * (p.depth - radiusA);
+        const Vec3 coreB = rotate(b.turn, (p.position - b.from) + n * radiusB);
+        now.points[i].position = b.to + coreB - now.normal * radiusB;
+        now.points[i].depth = dot(between + rotate(a.turn, coreA) - coreB, now.normal) + radiusA + radiusB;
+        now.points[i].feature = p.feature;
+    }
+}
+
+/// What the stage keeps from one step to the next, per chunk of candidates (see the file comment).
+class ManifoldReuse {
+public:
+    /// A manifold as computed, with what its ContactPair held besides the bodies.
+    struct Stored {
+        Manifold manifold;
+        float radiusA = 0, radiusB = 0;  ///< roundings of the two shapes (see moveManifold)
+        std::uint32_t triangle = ~0u;
+        std::uint16_t childA = 0, childB = 0;
+        bool swapped = false;  ///< A is the candidate's second body
+    };
+    /// One candidate pair: the bodies and shapes it was computed for, their poses and the margin then, its manifolds.
+    struct Entry {
+        std::uint64_t order = 0;  ///< the candidates' canonical order (see orderOf)
+        std::uint64_t slots = 0, generations = 0;
+        std::uint32_t shapeFirst = 0, shapeSecond = 0;
+        BodyPose first, second;
+        float margin = 0;
+        std::uint32_t firstStored = 0, storedCount = 0;  ///< in its chunk's `stored`
+    };
+    struct ChunkCache {
+        std::vector<Entry> entries;  ///< ascending `order`
+        std::vector<Stored> stored;
+    };
+    /// Key of a candidate in canonical order: moving pairs by dense indices, then moving-static pairs and meshes by
+    /// moving dense index and static slot (CandidatePairs' orders). Dense indices change when bodies are removed; an
+    /// entry found by order is used only if its slots and generations match as well.
+    enum class Section : std::uint64_t { Moving, Static, Mesh };
+    static std::uint64_t orderOf(Section section, std::uint32_t first, std::uint32_t second) {
+        return (static_cast<std::uint64_t>(section) << 62) | (std::uint64_t{first & 0x3FFFFFFFu} << 32) | second;
+    }
+
+    /// Walks last step's entries in ascending order for one chunk; starts with a binary search.
+    class Finder {
+    public:
+        struct Found {
+            const Entry* entry = nullptr;
+            const Stored* stored = nullptr;  ///< the entry's first manifold
+        };
+        explicit Finder(const ManifoldReuse& reuse) : reuse_(&reuse) {}
+        /// Last step's entry of the candidate with this order, if any; orders must be asked in ascending order.
+        Found find(std::uint64_t order);
+
+    private:
+        const ManifoldReuse* reuse_;
+        std::size_t chunk_ = 0, index_ = 0;
+        bool started_ = false;
+    };
+
+    /// Starts a step whose candidates fill `chunkCount` chunks: this step's caches are emptied.
+    void begin(std::size_t chunkCount);
+    ChunkCache& current(std::size_t chunk) { return current_[chunk]; }
+    /// Ends the step: this step's entries become the ones the next step finds.
+    void finish();
+    /// Forgets everything (reuse switched off).
+    void clear();
+
+private:
+    std::vector<ChunkCache> previous_, current_;
+    std::size_t currentCount_ = 0;
+    /// Per chunk of previous_: the largest order in it or any chunk before it (0 if none), for the binary search.
+    std::vector<std::uint64_t> previousLast_;
+};
+
+}  // namespace rubble::detail
