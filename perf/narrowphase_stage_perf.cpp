@@ -4,7 +4,9 @@
 // is timed. S1 as it starts (exactly aligned cubes: the cheapest clipping) and after 60 steps (poses and velocities
 // as the step leaves them: the case the runner's profile shows). S3 after 60 and 90 steps, while the pile meets the
 // terrain (bodies reach it after about 50 steps), and after 300, when it has collapsed into a heap on the terrain:
-// triangle jobs of spheres, cubes and capsules, and every pair kind among them.
+// triangle jobs of spheres, cubes and capsules, and every pair kind among them. The `reused` cases run the stage with
+// manifold reuse on: the poses stay frozen, so from the second run on every pair that is worth it reuses its
+// manifolds (narrowphase/manifold_reuse.h), which is what a settled scene costs; the others compute every pair.
 #include <benchmark/benchmark.h>
 
 #include <memory>
@@ -32,12 +34,14 @@ struct FrozenScene {
     BroadPhaseStage broad;
     CandidatePairs candidates;
     NarrowPhaseParams params;
+    float reuseDistance = 0;
     std::string file;
     int steps = 0;
 
     FrozenScene(const char* file_, int steps_) : file(file_), steps(steps_) {
         Scene scene = loadScene(std::string(RUBBLE_SOURCE_DIR "/scenes/") + file);
         params = {scene.settings.contactMargin, scene.settings.timeStep};
+        reuseDistance = scene.settings.manifoldReuseDistance;
         // The bodies where the engine's own steps leave them (solver included, if the step has one).
         scene.settings.threads = 2;
         World world(scene.settings);
@@ -87,7 +91,7 @@ struct FrozenScene {
     }
 };
 
-void runStage(benchmark::State& state, const char* file, int steps) {
+void runStage(benchmark::State& state, const char* file, int steps, bool reuse) {
     static std::vector<std::unique_ptr<FrozenScene>> cache;
     FrozenScene& scene = *[&] {
         for (auto& s : cache)
@@ -98,8 +102,10 @@ void runStage(benchmark::State& state, const char* file, int steps) {
     TaskPool pool(static_cast<int>(state.range(0)));
     NarrowPhaseStage stage;
     Contacts contacts;
+    NarrowPhaseParams params = scene.params;
+    params.reuseDistance = reuse ? scene.reuseDistance : 0.0f;
     for (auto _ : state) {
-        stage.run(scene.candidates, scene.storage, scene.shapes, scene.params, pool, contacts);
+        stage.run(scene.candidates, scene.storage, scene.shapes, params, pool, contacts);
         benchmark::DoNotOptimize(contacts.manifolds.data());
     }
     state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * contacts.manifolds.size()));
@@ -108,35 +114,42 @@ void runStage(benchmark::State& state, const char* file, int steps) {
     state.counters["candidates"] =
         static_cast<double>(scene.candidates.moving.size() + scene.candidates.statics.size());
     state.counters["triangles"] = static_cast<double>(scene.candidates.meshTriangles.size());
+    state.counters["reused"] = stage.reusedManifolds();
 }
 
 }  // namespace
 
-BENCHMARK_CAPTURE(runStage, S1_pyramid_start, "s1_pyramid.json", 0)
+BENCHMARK_CAPTURE(runStage, S1_pyramid_start, "s1_pyramid.json", 0, false)
     ->Arg(1)
     ->Arg(2)
     ->ArgName("threads")
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
-BENCHMARK_CAPTURE(runStage, S1_pyramid_step60, "s1_pyramid.json", 60)
+BENCHMARK_CAPTURE(runStage, S1_pyramid_step60, "s1_pyramid.json", 60, false)
     ->Arg(1)
     ->Arg(2)
     ->ArgName("threads")
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
-BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step60, "s3_mesh_pile.json", 60)
+BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step60, "s3_mesh_pile.json", 60, false)
     ->Arg(1)
     ->Arg(2)
     ->ArgName("threads")
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
-BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step90, "s3_mesh_pile.json", 90)
+BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step90, "s3_mesh_pile.json", 90, false)
     ->Arg(1)
     ->Arg(2)
     ->ArgName("threads")
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
-BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step300, "s3_mesh_pile.json", 300)
+BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step300, "s3_mesh_pile.json", 300, false)
+    ->Arg(1)
+    ->Arg(2)
+    ->ArgName("threads")
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step300_reused, "s3_mesh_pile.json", 300, true)
     ->Arg(1)
     ->Arg(2)
     ->ArgName("threads")
