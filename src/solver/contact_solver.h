@@ -10,11 +10,17 @@
 //
 // Island-parallel: given the step's islands, small islands are packed, in island order, into blocks of a few
 // hundred manifolds that share no body with any other block. Each block is coloured on its own and solved whole by
-// one task, every iteration of it while its rows are still in the core's cache; only islands too large for one
-// task (S1's pyramid) are coloured together and solved colour by colour across the threads. The packing depends
-// only on the islands, never on the thread count.
+// one task, every iteration of it while its rows are still in the core's cache. Islands too large for one task (S1's
+// pyramid) are solved colour by colour across the threads; when their colours are small (few batches each, so that
+// waits between colours cost more than the second thread saves: S3's pile) they are first cut in two slabs across
+// their longest axis: in each pass each slab is solved whole by one task, and the manifolds that cross the cut are
+// coloured together and solved colour by colour across the threads, before or after the slabs in turn. The packing
+// and the cut depend only on the islands, the bodies' positions and the last step's colouring, never on the thread
+// count.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "aligned_vector.h"
@@ -149,6 +155,7 @@ public:
     }
     const std::vector<ColorRange>& colorRanges() const { return colors_; }
     const std::vector<ColorSpan>& blocks() const { return blocks_; }
+    const std::vector<ColorSpan>& slabs() const { return slabs_; }
     ColorSpan largeIslands() const { return large_; }
     bool hasOverflow() const {
         return std::any_of(colors_.begin(), colors_.end(), [](const ColorRange& r) { return r.overflow; });
@@ -156,13 +163,19 @@ public:
 
 private:
     /// Runs kernel(batch, lane, rows, pass) over every colour `passes` times (pass 0, 1, ...): a block runs all its
-    /// passes in one task, the large islands colour by colour across the threads.
+    /// passes in one task; in each pass the large islands' slabs run one task each, and the manifolds that cross
+    /// them colour by colour across the threads, after the slabs, or before them in every other pass from
+    /// `firstIteration` on (the iterations; a warm start or a bounce keeps one order).
     template <class Kernel>
-    void forEachColor(TaskPool& pool, Kernel&& kernel, int passes = 1, const JointPass* joints = nullptr);
+    void forEachColor(TaskPool& pool, Kernel&& kernel, int passes = 1, const JointPass* joints = nullptr,
+                      int firstIteration = std::numeric_limits<int>::max());
     template <class Kernel>
     void solveRange(const ColorRange& range, const BodyRows& rows, Kernel& kernel, int pass);
-    /// Lists the manifolds by block (blocks_ spans, then large_), into segmentManifolds_ / segmentStart_.
-    void partition(const Contacts& contacts, const Islands* islands);
+    /// Lists the manifolds by block (blocks_ spans, then the slabs, then large_), into segmentManifolds_ /
+    /// segmentStart_.
+    void partition(const Contacts& contacts, const Islands* islands, const MovingBodies& m);
+    /// Appends largePart_ as slabs (when large enough) and the manifolds that cross them (see the .cpp).
+    void splitIntoSlabs(const Contacts& contacts, const MovingBodies& m);
     BodyRows rowsFor(int worker);
     /// Builds the constraint rows of batches [begin, end) from the inputs prepare() kept.
     void buildBatches(std::uint32_t begin, std::uint32_t end);
@@ -212,6 +225,9 @@ private:
     }
     std::vector<ColorRange> colors_;
     std::vector<ColorSpan> blocks_;
+    /// Slabs of the large islands, each solved whole by one task in every pass, before large_, which then holds
+    /// only the manifolds that cross from one slab to another.
+    std::vector<ColorSpan> slabs_;
     ColorSpan large_;
     std::vector<std::uint32_t> manifoldOfLane_;  ///< batch * kLanes + lane -> manifold, ~0u for an empty lane
     std::vector<std::uint8_t> batchPoints_;      ///< per batch: the most points of its lanes' manifolds
@@ -224,9 +240,15 @@ private:
     std::vector<std::uint32_t> segmentStart_;      ///< segment k is segmentManifolds_[segmentStart_[k], ...[k + 1])
     std::vector<std::uint8_t> placed_;             ///< per manifold: listed in a block
     std::vector<std::uint32_t> segmentOfIsland_;   ///< per island: its block, or blocks_.size()
-    std::vector<std::uint32_t> blockOfSegment_;    ///< prepare scratch: a segment's block, if it kept constraints
-    std::vector<std::int32_t> solverIndex_;        ///< dense index of a moving body -> solver index, -1 if untouched
-    std::vector<std::uint64_t> bodyColors_;        ///< per solver index: colours that already hold the body
+    std::vector<std::uint32_t> largePart_;         ///< manifolds in no block
+    std::vector<Vec3> slabPlaces_;                 ///< where every 8th manifold of largePart_ lies
+    std::vector<float> slabKeys_;                  ///< those places along the cut's axis
+    std::vector<std::uint32_t> slabParts_[2], crossing_;  ///< largePart_ split (see splitIntoSlabs)
+    std::size_t slabSegments_ = 0;                        ///< segments before the last that are slabs
+    float largeBatchesPerColor_ = INFINITY;               ///< last step's, for the choice of slabs
+    std::vector<std::uint32_t> blockOfSegment_;  ///< prepare scratch: a segment's block, if it kept constraints
+    std::vector<std::int32_t> solverIndex_;      ///< dense index of a moving body -> solver index, -1 if untouched
+    std::vector<std::uint64_t> bodyColors_;      ///< per solver index: colours that already hold the body
     std::vector<std::uint32_t> colorOf_;
     std::vector<std::uint8_t> movedInChunk_;  ///< loadBodies: whether a chunk of bodies moved since prepare()
     AlignedVector<float> p0x_, p0y_, p0z_, q0x_, q0y_, q0z_, q0w_;  ///< pose at prepare(), by solver index

@@ -47,16 +47,17 @@ void buildPyramid(World& world, int layers) {
     }
 }
 
-std::uint64_t pyramidHash(int threads, PositionCorrection correction, bool shock = false) {
+std::uint64_t pyramidHash(int threads, PositionCorrection correction, bool shock = false, int layers = 8,
+                          int steps = 40) {
     WorldSettings s;
     s.threads = threads;
     s.solver.positionCorrection = correction;
     s.solver.shockPropagation = shock;
     World world(s);
-    buildPyramid(world, 8);
+    buildPyramid(world, layers);
     // Knock it so that the solve is not symmetric and colours really interleave.
     world.applyLinearImpulse(world.bodies().back(), {800, 0, 300});
-    for (int i = 0; i < 40; ++i) world.step(1.0f / 60.0f);
+    for (int i = 0; i < steps; ++i) world.step(1.0f / 60.0f);
     return world.stateHash();
 }
 
@@ -67,6 +68,9 @@ TEST(ContactSolver, StateDoesNotDependOnThreadCount) {
         EXPECT_EQ(one, pyramidHash(2, c)) << positionCorrectionName(c);
         EXPECT_EQ(one, pyramidHash(3, c)) << positionCorrectionName(c);
     }
+    // Twelve layers: 4,324 manifolds, so the pyramid is solved in slabs.
+    EXPECT_EQ(pyramidHash(1, PositionCorrection::Baumgarte, false, 12, 10),
+              pyramidHash(2, PositionCorrection::Baumgarte, false, 12, 10));
     const std::uint64_t shocked = pyramidHash(1, PositionCorrection::Baumgarte, true);
     EXPECT_EQ(shocked, pyramidHash(2, PositionCorrection::Baumgarte, true));
     EXPECT_NE(shocked, pyramidHash(1, PositionCorrection::Baumgarte)) << "the shock pass changed nothing";
@@ -189,7 +193,9 @@ TEST(ContactSolver, IslandBlocksEndWhereOneColouringEnds) {
     s.threads = 2;
     s.effects = s.effects.without(Effect::Sleeping);
     World world(s);
-    buildPyramid(world, 12);  // one island too large for a block (over a thousand manifolds)
+    // One island too large for a block (1,785 manifolds), too small to be cut in slabs (their order of solving is
+    // their own: LargeIslandsAreCutIntoSlabsThatShareNoBody).
+    buildPyramid(world, 9);
     BodyDef box;
     box.shape = world.createShape(BoxDef{{0.4f, 0.4f, 0.4f}});
     for (int stack = 0; stack < 300; ++stack)  // small islands: stacks of three boxes beside the pyramid
@@ -219,6 +225,7 @@ TEST(ContactSolver, IslandBlocksEndWhereOneColouringEnds) {
     together.prepare(w.contacts, w.impulses, w.bodies, w.settings, w.effects, h, *w.pool);
     ASSERT_GE(blocked.blocks().size(), 2u);
     ASSERT_GT(blocked.largeIslands().colorCount, 0u);
+    ASSERT_TRUE(blocked.slabs().empty());
     EXPECT_EQ(together.blocks().size(), 0u);
     EXPECT_EQ(blocked.stats().constraints, together.stats().constraints);
 
@@ -411,6 +418,62 @@ TEST(ContactSolver, WideKernelsAgreeWithScalarKernelsBitForBit) {
         ASSERT_EQ(std::memcmp(&wide, &scalar, sizeof wide), 0) << "trial " << trial;
         ASSERT_EQ(std::memcmp(&wideExtras, &scalarExtras, sizeof wideExtras), 0) << "trial " << trial;
     }
+}
+
+// A large island is cut in two slabs, each solved whole by one task, and the manifolds that cross the cut: no dynamic
+// body is in both slabs, every manifold crossing the cut has one dynamic body on each side, and every constraint is
+// in exactly one of them.
+TEST(ContactSolver, LargeIslandsAreCutIntoSlabsThatShareNoBody) {
+    WorldSettings s;
+    s.threads = 2;
+    s.effects = s.effects.without(Effect::Sleeping);
+    World world(s);
+    buildPyramid(world, 12);  // 4,324 manifolds in one island
+    world.step(1.0f / 60.0f);
+    World::Impl& w = detail::WorldAccess::of(world);
+    detail::ContactSolver solver;
+    // The first prepare colours the island whole: whether to cut it follows from how its colours filled then (17
+    // batches a colour here, under the 64 that pay for a colour's dispatch).
+    solver.prepare(w.contacts, w.impulses, w.bodies, w.settings, w.effects, 1.0f / 60.0f, *w.pool, nullptr, &w.islands);
+    ASSERT_TRUE(solver.slabs().empty());
+    solver.prepare(w.contacts, w.impulses, w.bodies, w.settings, w.effects, 1.0f / 60.0f, *w.pool, nullptr, &w.islands);
+    ASSERT_EQ(solver.slabs().size(), 2u);
+    ASSERT_GT(solver.largeIslands().colorCount, 0u) << "a cut through a pyramid crosses some contacts";
+    std::vector<int> slabOfRow(solver.bodies().count, -1);
+    std::size_t lanes[3] = {};
+    const auto forEachLane = [&](detail::ContactSolver::ColorSpan span, auto&& visit) {
+        for (std::uint32_t c = span.firstColor; c < span.firstColor + span.colorCount; ++c) {
+            const auto range = solver.colorRanges()[c];
+            for (std::uint32_t bi = range.firstBatch; bi < range.firstBatch + range.batchCount; ++bi) {
+                const ContactBatch& b = solver.batches()[bi];
+                for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
+                    if (b.bodyA[lane] != b.bodyB[lane]) visit(b.bodyA[lane], b.bodyB[lane]);
+            }
+        }
+    };
+    const auto dynamic = [&](std::int32_t row) {
+        return solver.bodies().mass[static_cast<std::size_t>(row)].inverseMass > 0;
+    };
+    for (int slab = 0; slab < 2; ++slab)
+        forEachLane(solver.slabs()[static_cast<std::size_t>(slab)], [&](std::int32_t a, std::int32_t b) {
+            ++lanes[slab];
+            for (const std::int32_t row : {a, b}) {
+                if (!dynamic(row)) continue;
+                int& owner = slabOfRow[static_cast<std::size_t>(row)];
+                EXPECT_TRUE(owner == -1 || owner == slab) << "row " << row << " in both slabs";
+                owner = slab;
+            }
+        });
+    forEachLane(solver.largeIslands(), [&](std::int32_t a, std::int32_t b) {
+        ++lanes[2];
+        ASSERT_TRUE(dynamic(a) && dynamic(b)) << "a contact with the ground lies in its body's slab";
+        const int slabA = slabOfRow[static_cast<std::size_t>(a)], slabB = slabOfRow[static_cast<std::size_t>(b)];
+        EXPECT_TRUE(slabA != slabB || slabA == -1) << "a crossing manifold within one slab";
+    });
+    EXPECT_EQ(lanes[0] + lanes[1] + lanes[2], solver.stats().constraints);
+    EXPECT_LT(lanes[2] * 10, solver.stats().constraints) << "a cut crosses few contacts";
+    EXPECT_LT(lanes[0], 2 * lanes[1]);
+    EXPECT_LT(lanes[1], 2 * lanes[0]);
 }
 
 }  // namespace
