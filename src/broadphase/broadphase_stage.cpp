@@ -1,6 +1,7 @@
 #include "broadphase/broadphase_stage.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "broadphase/multi_resolution_grid.h"
@@ -12,18 +13,16 @@
 namespace rubble::detail {
 namespace {
 
-/// SAP meets about this many boxes per body along its sweep axis before the grid is cheaper. Measured with
-/// `rubble run --broadphase sap|grid --steps 100` on the standard scenes, whose estimates are S1 189, S2 95,
-/// S3 73-101, S4 540, S5 66-78, S6 69: the grid is faster on S1 (by 12%), S2 (25%), S4, S5 (10%) and S6 (1.3 against
-/// 2.3 ms at one thread: its pyramids fill both horizontal axes, and a sweep along one meets every row), and even
-/// with SAP on S3 while its bodies fall. So the grid is the default from well below them; SAP keeps the sparse and
-/// the long thin worlds, where its kept order makes a step's sort nearly free.
+/// SAP meets about this many boxes per body along its sweep axis before the grid is cheaper: the estimate `auto`
+/// starts from (BroadPhaseTimer then measures). It was set with `rubble run --broadphase sap|grid --steps 100` on the
+/// standard scenes, whose estimates are S1 189, S2 95, S3 73-101, S4 540, S5 66-78, S6 69; the grid was faster on
+/// all of them then. Measured again since (600 steps, sorting and SAP's sweep faster), SAP is faster on S1 (0.54
+/// against 0.61 ms at one thread), S2 (1.30 against 1.50) and S3 (1.22 against 1.33), the grid on S5 (0.53 against
+/// 0.62) and S6 (1.11 against 1.29): the estimate cannot tell them apart, so the measurement decides.
 constexpr float kSweepCandidatesForGrid = 40.0f;
 /// The choice only flips when the estimate crosses the threshold by this factor, so that a scene near the
 /// threshold does not throw away SAP's temporal coherence every other step.
 constexpr float kHysteresis = 1.5f;
-/// Scenes change slowly: `auto` looks again every this many steps, or sooner when the body count moves by 1/8.
-constexpr std::uint32_t kStepsBetweenChoices = 16;
 constexpr std::uint32_t kChoiceChunk = 16384;
 
 struct AxisSums {
@@ -70,6 +69,39 @@ BroadPhaseChoice chooseBroadPhase(const Bounds& b, BroadPhaseKind current, TaskP
         current == BroadPhaseKind::Grid ? kSweepCandidatesForGrid / kHysteresis : kSweepCandidatesForGrid * kHysteresis;
     choice.kind = choice.sweepCandidatesPerBody > threshold ? BroadPhaseKind::Grid : BroadPhaseKind::SweepAndPrune;
     return choice;
+}
+
+BroadPhaseKind BroadPhaseTimer::next(std::optional<BroadPhaseKind> estimate) {
+    if (estimate && (*estimate != inUse_ || samples_ == 0)) {
+        inUse_ = *estimate;
+        samples_ = 0;
+        stepsSinceTrial_ = 0;
+        trialStep_ = 0;
+    }
+    if (trialStep_ == 0 && samples_ >= kTrialSteps && stepsSinceTrial_ >= kTrialPeriod) trialStep_ = 1;
+    return trialStep_ > 0 ? other(inUse_) : inUse_;
+}
+
+void BroadPhaseTimer::record(double ms) {
+    if (trialStep_ == 0) {
+        // A running average that forgets within a few dozen steps: scenes settle, and piles spread.
+        averageMs_ = samples_ == 0 ? ms : 0.9 * averageMs_ + 0.1 * ms;
+        ++samples_;
+        ++stepsSinceTrial_;
+        return;
+    }
+    trialMs_[trialStep_ - 1] = ms;
+    if (++trialStep_ <= kTrialSteps) return;
+    double* measured = trialMs_ + kTrialWarmup;
+    const std::uint32_t count = kTrialSteps - kTrialWarmup;
+    std::nth_element(measured, measured + count / 2, measured + count);
+    if (measured[count / 2] < 0.9 * averageMs_) {
+        inUse_ = other(inUse_);
+        averageMs_ = measured[count / 2];
+        samples_ = 1;
+    }
+    trialStep_ = 0;
+    stepsSinceTrial_ = 0;
 }
 
 BroadPhaseStage::BroadPhaseStage()
@@ -147,21 +179,26 @@ void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage
     BroadPhaseKind kind = requested;
     if (requested == BroadPhaseKind::Auto) {
         const std::uint32_t n = moving.size();
-        const bool countMoved = n > countAtChoice_ + countAtChoice_ / 8 || n < countAtChoice_ - countAtChoice_ / 8;
-        if (stepsSinceChoice_ == 0 || stepsSinceChoice_ >= kStepsBetweenChoices || countMoved) {
-            lastChoice_ = chooseBroadPhase(moving, lastKind_, pool).kind;
-            stepsSinceChoice_ = 0;
-            countAtChoice_ = n;
+        const bool countMoved =
+            n > countAtEstimate_ + countAtEstimate_ / 8 || n < countAtEstimate_ - countAtEstimate_ / 8;
+        std::optional<BroadPhaseKind> estimate;
+        if (!estimated_ || countMoved) {
+            estimate = chooseBroadPhase(moving, timer_.inUse(), pool).kind;
+            estimated_ = true;
+            countAtEstimate_ = n;
         }
-        ++stepsSinceChoice_;
-        kind = lastChoice_;
+        kind = timer_.next(estimate);
     }
+    const auto searchBegin = std::chrono::steady_clock::now();
     if (kind == BroadPhaseKind::Grid) {
         grid_->findPairs(moving, filter, pool, out.moving);
     } else {
         sap_->findPairs(moving, bodies.slot.data(), static_cast<std::uint32_t>(storage.slots().size()), filter, pool,
                         out.moving);
     }
+    if (requested == BroadPhaseKind::Auto)
+        timer_.record(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - searchBegin).count());
     // A switch loses SAP's kept order; it is rebuilt from scratch the next time SAP runs.
     if (kind != lastKind_ && lastKind_ == BroadPhaseKind::SweepAndPrune) sap_->reset();
     lastKind_ = kind;

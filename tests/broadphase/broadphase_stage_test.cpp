@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
 
 #include "body_storage.h"
@@ -190,6 +191,46 @@ TEST(BroadPhaseStage, MatchesBruteForceWithChurnForEveryAlgorithm) {
             }
         }
     }
+}
+
+TEST(BroadPhaseTimer, TriesTheOtherAlgorithmNowAndThenAndKeepsTheFasterOne) {
+    // Synthetic timings: the estimate's grid takes 1 ms a step, SAP 0.7 ms (0.5 ms more on its first two steps,
+    // which rebuild its order). The trial comes after kTrialPeriod steps, runs SAP for kTrialSteps, and SAP stays.
+    using Timer = BroadPhaseTimer;
+    Timer timer;
+    const auto cost = [](BroadPhaseKind k, std::uint32_t stepInRun, double sap) {
+        return k == BroadPhaseKind::Grid ? 1.0 : sap + (stepInRun < Timer::kTrialWarmup ? 0.5 : 0.0);
+    };
+    auto run = [&](std::uint32_t steps, double sap, std::optional<BroadPhaseKind> estimate = std::nullopt) {
+        std::vector<BroadPhaseKind> ran;
+        std::uint32_t inRun = 0;
+        for (std::uint32_t k = 0; k < steps; ++k) {
+            const BroadPhaseKind kind = timer.next(k == 0 ? estimate : std::nullopt);
+            inRun = !ran.empty() && ran.back() == kind ? inRun + 1 : 0;
+            ran.push_back(kind);
+            timer.record(cost(kind, inRun, sap));
+        }
+        return ran;
+    };
+    std::vector<BroadPhaseKind> ran = run(Timer::kTrialPeriod, 0.7, BroadPhaseKind::Grid);
+    EXPECT_TRUE(std::all_of(ran.begin(), ran.end(), [](BroadPhaseKind k) { return k == BroadPhaseKind::Grid; }));
+    ran = run(Timer::kTrialSteps, 0.7);
+    EXPECT_TRUE(std::all_of(ran.begin(), ran.end(), [](BroadPhaseKind k) {
+        return k == BroadPhaseKind::SweepAndPrune;
+    })) << "the trial runs the other algorithm";
+    EXPECT_EQ(timer.inUse(), BroadPhaseKind::SweepAndPrune) << "0.7 ms beats 1 ms by more than a tenth";
+
+    // Now SAP slows to 1.3 ms (the scene changed): the grid's trial, a period later, wins it back.
+    run(Timer::kTrialPeriod, 1.3);
+    EXPECT_EQ(timer.inUse(), BroadPhaseKind::SweepAndPrune);
+    run(Timer::kTrialSteps, 1.3);
+    EXPECT_EQ(timer.inUse(), BroadPhaseKind::Grid);
+    // Within a tenth of each other (SAP at 0.95 ms): no switch back, trial after trial.
+    for (int period = 0; period < 3; ++period) run(Timer::kTrialPeriod + Timer::kTrialSteps, 0.95);
+    EXPECT_EQ(timer.inUse(), BroadPhaseKind::Grid);
+    // A new estimate (the body count moved) is followed at once.
+    EXPECT_EQ(timer.next(BroadPhaseKind::SweepAndPrune), BroadPhaseKind::SweepAndPrune);
+    EXPECT_EQ(timer.inUse(), BroadPhaseKind::SweepAndPrune);
 }
 
 TEST(BroadPhaseStage, AutoPicksTheGridForDenseSweepsAndSapForSparseOnes) {
