@@ -648,7 +648,9 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             if (!worthReusing(tables_.kind[shape1], tables_.kind[shape2])) return false;
             const std::uint32_t slot1 = m.slot[first], slot2 = secondStatic ? st.slot[second] : m.slot[second];
             const auto& slots = storage.slots();
-            ManifoldReuse::Entry now;
+            // Written in place (a whole Entry built on the stack and copied in stalls on store forwarding).
+            const auto entryIndex = static_cast<std::uint32_t>(cache->entries.size());
+            ManifoldReuse::Entry& now = cache->entries.emplace_back();
             now.order =
                 ManifoldReuse::orderOf(section, first, section == ManifoldReuse::Section::Moving ? second : slot2);
             now.slots = (std::uint64_t{slot1} << 32) | slot2;
@@ -677,39 +679,43 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
                 // Points the old margin left out were further apart than it, and can have closed by `moved`
                 // since: the surfaces must not be able to close the rest in this step.
                 if (moved <= params.reuseDistance && now.margin - params.margin + moved < then.margin) {
-                    ManifoldReuse::Entry kept = then;
-                    kept.order = now.order;
-                    kept.firstStored = static_cast<std::uint32_t>(cache->stored.size());
+                    // Kept as computed then, under this step's order.
+                    const std::uint64_t order = now.order;
+                    const auto firstStored = static_cast<std::uint32_t>(cache->stored.size());
+                    now = then;
+                    now.order = order;
+                    now.firstStored = firstStored;
                     cache->stored.insert(cache->stored.end(), found.stored, found.stored + then.storedCount);
-                    cache->entries.push_back(kept);
+                    const auto addReuse = [&](const ContactPair& pair, std::uint32_t triangles, bool swapped,
+                                              std::uint32_t stored, std::uint32_t count) {
+                        Job& job = chunk.jobs.emplace_back();
+                        job.pair = pair;
+                        job.triangles = triangles;
+                        job.reuse = static_cast<std::uint32_t>(chunk.reuses.size());
+                        Reuse& r = chunk.reuses.emplace_back();
+                        r.a = swapped ? change2 : change1;
+                        r.b = swapped ? change1 : change2;
+                        r.firstStored = stored, r.count = count;
+                    };
                     if (then.storedCount == 0) return true;
-                    Job job;
-                    job.kernel = PairKernel::Count;
                     if (section == ManifoldReuse::Section::Mesh) {
                         const ManifoldReuse::Stored& s = *found.stored;
-                        job.pair = {first, second, false, true, s.triangle, s.childA, s.childB};
-                        job.triangles = then.storedCount;
-                        job.reuse = static_cast<std::uint32_t>(chunk.reuses.size());
-                        chunk.reuses.push_back({change1, change2, kept.firstStored, then.storedCount});
-                        chunk.jobs.push_back(job);
+                        addReuse({first, second, false, true, s.triangle, s.childA, s.childB}, then.storedCount, false,
+                                 firstStored, then.storedCount);
                         return true;
                     }
                     for (std::uint32_t k = 0; k < then.storedCount; ++k) {
                         const ManifoldReuse::Stored& s = found.stored[k];
-                        job.pair =
-                            s.swapped ? ContactPair{second, first, secondStatic, false, s.triangle, s.childA, s.childB}
-                                      : ContactPair{first, second, false, secondStatic, s.triangle, s.childA, s.childB};
-                        job.reuse = static_cast<std::uint32_t>(chunk.reuses.size());
-                        chunk.reuses.push_back(s.swapped ? Reuse{change2, change1, kept.firstStored + k, 1}
-                                                         : Reuse{change1, change2, kept.firstStored + k, 1});
-                        chunk.jobs.push_back(job);
+                        addReuse(s.swapped
+                                     ? ContactPair{second, first, secondStatic, false, s.triangle, s.childA, s.childB}
+                                     : ContactPair{first, second, false, secondStatic, s.triangle, s.childA, s.childB},
+                                 0, s.swapped, firstStored + k, 1);
                     }
                     return true;
                 }
             }
             const auto jobsNow = static_cast<std::uint32_t>(chunk.jobs.size());
-            chunk.pending.push_back({static_cast<std::uint32_t>(cache->entries.size()), first, jobsNow, jobsNow});
-            cache->entries.push_back(now);
+            chunk.pending.push_back({entryIndex, first, jobsNow, jobsNow});
             return false;
         };
         // Closes the pending entry reuseOrKeep opened for the candidate whose jobs were just made.
