@@ -35,6 +35,13 @@ namespace rubble::detail {
 
 struct Islands;
 
+/// Whether the solver moves this body (not kinematic, frozen, asleep or of infinite mass).
+inline bool isDynamicBody(const MovingBodies& m, std::uint32_t dense) {
+    return (m.flags[dense] & (kFlagKinematic | kFlagFrozen | kFlagAsleep)) == 0 && m.invMass[dense] > 0;
+}
+/// Before colouring, segmentOfIsland_ names segments; this one is the large islands'.
+inline constexpr std::uint32_t kLargeSegment = ~0u;
+
 /// The joints' share of one pass over the contacts, for one segment: a block's joints (segment = block index) or the
 /// large islands' joints (segment = number of blocks). Pass 0 is the warm start when the call asks for one.
 using JointPass = FunctionRef<void(std::uint32_t segment, int pass)>;
