@@ -11,27 +11,17 @@
 
 #include "narrowphase/manifold_reuse.h"
 #include "narrowphase/narrowphase_stage.h"
+#include "support/random_poses.h"
 #include "support/stage_scene.h"
 #include "support/test_shapes.h"
 
 using namespace rubble;
+using rubble::test::randomDirection;
+using rubble::test::randomRotation;
 using rubble::test::StageScene;
 using namespace rubble::detail;
 
 namespace {
-
-Quat randomRotation(std::mt19937& rng) {
-    std::normal_distribution<float> g;
-    Quat q{g(rng), g(rng), g(rng), g(rng)};
-    const float n = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
-    return {q.x / n, q.y / n, q.z / n, q.w / n};
-}
-
-Vec3 randomDirection(std::mt19937& rng) {
-    std::normal_distribution<float> g;
-    const Vec3 v{g(rng), g(rng), g(rng)};
-    return v / length(v);
-}
 
 Manifold twoPointManifold() {
     Manifold m;
@@ -210,34 +200,36 @@ struct Pile {
 using PairKey = std::tuple<std::uint32_t, bool, std::uint32_t, bool, std::uint32_t, std::uint16_t, std::uint16_t>;
 PairKey keyOf(const ContactPair& p) { return {p.a, p.aStatic, p.b, p.bStatic, p.triangle, p.childA, p.childB}; }
 
-void expectSameBits(const Contacts& x, const Contacts& y) {
+/// The same pairs and point counts in the same order; `check` compares each pair's two manifolds.
+template <class Check>
+void expectMatching(const Contacts& x, const Contacts& y, Check check) {
     ASSERT_EQ(x.manifolds.size(), y.manifolds.size());
     ASSERT_EQ(x.pointCount, y.pointCount);
     for (std::size_t k = 0; k < x.manifolds.size(); ++k) {
         ASSERT_TRUE(keyOf(x.pairs[k]) == keyOf(y.pairs[k])) << k;
-        const Manifold &a = x.manifolds[k], &b = y.manifolds[k];
-        ASSERT_EQ(a.pointCount, b.pointCount) << k;
-        ASSERT_EQ(std::memcmp(&a.normal, &b.normal, sizeof(Vec3)), 0) << k;
-        for (int p = 0; p < a.pointCount; ++p)
-            ASSERT_EQ(std::memcmp(&a.points[p], &b.points[p], sizeof(ContactPoint)), 0) << k << " " << p;
+        ASSERT_EQ(x.manifolds[k].pointCount, y.manifolds[k].pointCount) << k;
+        check(x.manifolds[k], y.manifolds[k], k);
     }
 }
 
-/// The same pairs, points and feature ids; positions, depths and normals within `tolerance`.
+void expectSameBits(const Contacts& x, const Contacts& y) {
+    expectMatching(x, y, [](const Manifold& a, const Manifold& b, std::size_t k) {
+        EXPECT_EQ(std::memcmp(&a.normal, &b.normal, sizeof(Vec3)), 0) << k;
+        for (int p = 0; p < a.pointCount; ++p)
+            EXPECT_EQ(std::memcmp(&a.points[p], &b.points[p], sizeof(ContactPoint)), 0) << k << " " << p;
+    });
+}
+
+/// Feature ids the same; positions, depths and normals within `tolerance`.
 void expectClose(const Contacts& x, const Contacts& y, float tolerance) {
-    ASSERT_EQ(x.manifolds.size(), y.manifolds.size());
-    ASSERT_EQ(x.pointCount, y.pointCount);
-    for (std::size_t k = 0; k < x.manifolds.size(); ++k) {
-        ASSERT_TRUE(keyOf(x.pairs[k]) == keyOf(y.pairs[k])) << k;
-        const Manifold &a = x.manifolds[k], &b = y.manifolds[k];
-        ASSERT_EQ(a.pointCount, b.pointCount) << k;
+    expectMatching(x, y, [&](const Manifold& a, const Manifold& b, std::size_t k) {
         EXPECT_LE(length(a.normal - b.normal), tolerance) << k;
         for (int p = 0; p < a.pointCount; ++p) {
             EXPECT_EQ(a.points[p].feature, b.points[p].feature) << k << " " << p;
             EXPECT_LE(length(a.points[p].position - b.points[p].position), tolerance) << k << " " << p;
             EXPECT_NEAR(a.points[p].depth, b.points[p].depth, tolerance) << k << " " << p;
         }
-    }
+    });
 }
 
 }  // namespace

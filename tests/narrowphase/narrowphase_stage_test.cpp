@@ -15,23 +15,14 @@
 #include "narrowphase/gjk.h"
 #include "narrowphase/narrowphase_stage.h"
 #include "parallel.h"
+#include "support/random_poses.h"
 #include "support/stage_scene.h"
 #include "support/test_shapes.h"
 
 using namespace rubble;
+using rubble::test::randomRotation;
 using rubble::test::StageScene;
 using namespace rubble::detail;
-
-namespace {
-
-Quat randomRotation(std::mt19937& rng) {
-    std::normal_distribution<float> g;
-    Quat q{g(rng), g(rng), g(rng), g(rng)};
-    const float n = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
-    return {q.x / n, q.y / n, q.z / n, q.w / n};
-}
-
-}  // namespace
 
 TEST(NarrowPhaseStage, ManifoldsExactlyWhereGjkFindsTheShapesWithinTheMargin) {
     StageScene scene;
