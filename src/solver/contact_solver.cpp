@@ -278,11 +278,13 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     // For the next step's choice of slabs: the large islands' batches over their colours, as if uncut (the slabs'
     // batches together over the most colours either needed).
     std::uint32_t largeBatches = 0, largeColors = 0;
-    for (const ColorSpan& span : slabs_.empty() ? std::vector<ColorSpan>{large_} : slabs_) {
+    const auto countLarge = [&](const ColorSpan& span) {
         largeColors = std::max(largeColors, span.colorCount);
         for (std::uint32_t c = span.firstColor; c < span.firstColor + span.colorCount; ++c)
             largeBatches += colors_[c].batchCount;
-    }
+    };
+    if (slabs_.empty()) countLarge(large_);
+    for (const ColorSpan& span : slabs_) countLarge(span);
     largeBatchesPerColor_ =
         largeColors > 0 ? static_cast<float>(largeBatches) / static_cast<float>(largeColors) : INFINITY;
     // Body rows: the touched bodies, the still row, one scratch row per worker.
@@ -528,40 +530,38 @@ void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel, int passes, co
         });
         blocksPending_ = false;
     }
+    // The large islands' colours (only the manifolds that cross the slabs, when there are slabs), each across the
+    // threads.
+    const auto solveColorByColor = [&](int pass) {
+        for (std::uint32_t c = 0; c < large_.colorCount; ++c) {
+            const ColorRange range = colors_[large_.firstColor + c];
+            if (range.overflow) {
+                const BodyRows rows = rowsFor(0);
+                solveRange(range, rows, kernel, pass);
+                continue;
+            }
+            pool.forChunks(
+                range.batchCount, kBatchChunk, [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
+                    const BodyRows rows = rowsFor(worker);
+                    for (std::size_t i = begin; i < end; ++i)
+                        kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows, pass);
+                });
+        }
+    };
     for (int pass = 0; pass < passes; ++pass) {
         if (joints) (*joints)(static_cast<std::uint32_t>(blocks_.size()), pass);
         // The manifolds that cross the slabs run before them in every other iteration and after them otherwise (and
         // in a warm start or a bounce), so that loads pass both ways across the cut: S5's wall, cut in two, sags
-        // 1.0 cm so, 16 cm with the crossing manifolds always after the slabs (2.0 cm uncut). One loop with one
-        // call of the colours (not two): GCC's inlining in the kernels below changes with the count, by 3% on S5.
-        const bool before = !slabs_.empty() && pass >= firstIteration && (pass - firstIteration) % 2 == 0;
-        for (int part = 0; part < 3; ++part) {
-            if (part == 1) {
-                if (!slabs_.empty())
-                    pool.forChunks(slabs_.size(), 1, [&](std::size_t slab, std::size_t, std::size_t, int worker) {
-                        const BodyRows rows = rowsFor(worker);
-                        for (std::uint32_t c = 0; c < slabs_[slab].colorCount; ++c)
-                            solveRange(colors_[slabs_[slab].firstColor + c], rows, kernel, pass);
-                    });
-                continue;
-            }
-            if ((part == 0) != before) continue;
-            // The large islands' colours (only the crossing manifolds, when there are slabs), each across the threads.
-            for (std::uint32_t c = 0; c < large_.colorCount; ++c) {
-                const ColorRange range = colors_[large_.firstColor + c];
-                if (range.overflow) {
-                    const BodyRows rows = rowsFor(0);
-                    solveRange(range, rows, kernel, pass);
-                    continue;
-                }
-                pool.forChunks(
-                    range.batchCount, kBatchChunk, [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
-                        const BodyRows rows = rowsFor(worker);
-                        for (std::size_t i = begin; i < end; ++i)
-                            kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows, pass);
-                    });
-            }
-        }
+        // 1.0 cm so, 16 cm with the crossing manifolds always after the slabs (2.0 cm uncut).
+        const bool crossingFirst = !slabs_.empty() && pass >= firstIteration && (pass - firstIteration) % 2 == 0;
+        if (crossingFirst) solveColorByColor(pass);
+        if (!slabs_.empty())
+            pool.forChunks(slabs_.size(), 1, [&](std::size_t slab, std::size_t, std::size_t, int worker) {
+                const BodyRows rows = rowsFor(worker);
+                for (std::uint32_t c = 0; c < slabs_[slab].colorCount; ++c)
+                    solveRange(colors_[slabs_[slab].firstColor + c], rows, kernel, pass);
+            });
+        if (!crossingFirst) solveColorByColor(pass);
     }
 }
 
