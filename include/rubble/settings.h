@@ -126,8 +126,9 @@ struct WorldSettings {
     float contactMargin = 0.02f;
     /// A pair of bodies whose shapes have moved less than this relative to each other since its contacts were
     /// computed keeps those contacts, moved with the bodies (their depths follow the motion to first order), instead
-    /// of computing them again; 0 computes every pair every step, m. Closed-form sphere and capsule pairs are always
-    /// computed. Jolt does the same by default for pairs that moved less than 1 mm and turned less than 2 degrees.
+    /// of computing them again; 0 computes every pair every step, m. Pairs whose kernels run in SIMD lanes (sphere,
+    /// capsule and box pairs, but not capsule-box) are always computed: they cost less than the lookup. Jolt does the
+    /// same by default for pairs that moved less than 1 mm and turned less than 2 degrees.
     float manifoldReuseDistance = 0.001f;
     Integrator integrator = Integrator::SemiImplicitEuler;
     /// Effects the scene declares. The engine removes those the content cannot show (see World::activeEffects).

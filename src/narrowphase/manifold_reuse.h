@@ -9,9 +9,10 @@
 // does not freeze while the solver moves its bodies.
 //
 // The stage keeps, per parallel chunk of candidates, an entry for every candidate whose kernels are dearer than the
-// lookup (not the closed-form sphere and capsule pairs): the bodies' poses and the speculative margin when its
-// manifolds were computed, and those manifolds. A reused entry is copied forward unchanged, so the motion is always
-// measured from the step that computed it and the manifolds are computed again once it adds up to the tolerance.
+// lookup (not the sphere, capsule and box pairs that run in SIMD lanes, capsule-box aside): the bodies' poses and the
+// speculative margin when its manifolds were computed, and those manifolds. A reused entry is copied forward unchanged,
+// so the motion is always measured from the step that computed it and the manifolds are computed again once it adds up
+// to the tolerance.
 #include <cstdint>
 #include <vector>
 
