@@ -76,23 +76,25 @@ void ContactSolver::splitIntoSlabs(const Contacts& contacts, const MovingBodies&
     // that core's cache, and only the manifolds that cross the cut are solved colour by colour across the threads
     // (see forEachColor). The cut depends on the bodies' positions only, never on the thread count. S3's pile at two
     // threads: velocity iterations 1.66 -> 1.33 ms, for 0.1 ms more in prepare.
-    const auto appendLarge = [&](const std::vector<std::uint32_t>& list) {
-        segmentManifolds_.insert(segmentManifolds_.end(), list.begin(), list.end());
+    const auto appendLarge = [&](const std::uint32_t* first, std::size_t count) {
+        segmentManifolds_.insert(segmentManifolds_.end(), first, first + count);
         segmentStart_.push_back(static_cast<std::uint32_t>(segmentManifolds_.size()));
     };
     if (largePart_.size() < kSlabManifolds || !(largeBatchesPerColor_ < kSlabBatchesPerColor)) {
-        appendLarge(largePart_);
+        appendLarge(largePart_.data(), largePart_.size());
         return;
     }
     // A manifold's place: its first dynamic body's. The cut runs across the longest axis of the box around the
     // places, at their median, so that the slabs hold about as many manifolds each. Every 8th manifold stands for
     // the rest: the slabs need not be equal to a manifold.
-    const auto dynamicSide = [&](const ContactPair& p) { return !p.aStatic && isDynamicBody(m, p.a) ? p.a : p.b; };
+    const auto dynamicSide = [&](std::uint32_t k) {
+        return (traits_[k] & kTraitDynamicA) != 0 ? contacts.pairs[k].a : contacts.pairs[k].b;
+    };
     constexpr std::size_t kSampleStride = 8;
     Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
     slabPlaces_.clear();
     for (std::size_t i = 0; i < largePart_.size(); i += kSampleStride) {
-        const std::uint32_t d = dynamicSide(contacts.pairs[largePart_[i]]);
+        const std::uint32_t d = dynamicSide(largePart_[i]);
         const Vec3 p{m.px[d], m.py[d], m.pz[d]};
         slabPlaces_.push_back(p);
         lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
@@ -107,26 +109,31 @@ void ContactSolver::splitIntoSlabs(const Contacts& contacts, const MovingBodies&
     std::nth_element(slabKeys_.begin(), middle, slabKeys_.end());
     const float cut = *middle;
     if (!(cut > (&lo.x)[axis] && cut <= (&hi.x)[axis])) {  // every place the same (or not finite): nothing to cut
-        appendLarge(largePart_);
+        appendLarge(largePart_.data(), largePart_.size());
         return;
     }
     // A manifold stays in a slab when all its dynamic bodies lie on that side of the cut; else it crosses.
+    // Written without branches: which side of the cut a manifold lies is a coin toss to the branch predictor.
     const auto slabOf = [&](std::uint32_t dense) { return coordinate[dense] < cut ? 0u : 1u; };
-    for (auto& slab : slabParts_) slab.clear();
-    crossing_.clear();
+    // Each list is kept as long as the large part (only `counts` of it used): growing it back every step would
+    // clear it every step.
+    std::uint32_t* lists[kSlabCount + 1];
+    std::size_t counts[kSlabCount + 1] = {};
+    for (std::size_t part = 0; part <= kSlabCount; ++part) {
+        if (slabParts_[part].size() < largePart_.size()) slabParts_[part].resize(largePart_.size());
+        lists[part] = slabParts_[part].data();
+    }
     for (const std::uint32_t k : largePart_) {
         const ContactPair& p = contacts.pairs[k];
-        const bool dynA = !p.aStatic && isDynamicBody(m, p.a), dynB = !p.bStatic && isDynamicBody(m, p.b);
+        const bool dynA = (traits_[k] & kTraitDynamicA) != 0, dynB = (traits_[k] & kTraitDynamicB) != 0;
         const std::uint32_t slabA = dynA ? slabOf(p.a) : kSlabCount, slabB = dynB ? slabOf(p.b) : kSlabCount;
         const std::uint32_t slab = slabA == kSlabCount ? slabB : slabA;
-        if (slab == kSlabCount || (slabB != kSlabCount && slabB != slab))
-            crossing_.push_back(k);  // no dynamic body (left out when coloured), or a cut between them
-        else
-            slabParts_[slab].push_back(k);
+        // No dynamic body (left out when coloured), or a cut between them: the crossing part (index kSlabCount).
+        const std::uint32_t part = slabB != kSlabCount && slabB != slab ? kSlabCount : slab;
+        lists[part][counts[part]++] = k;
     }
-    for (const auto& slab : slabParts_) appendLarge(slab);
+    for (std::size_t part = 0; part <= kSlabCount; ++part) appendLarge(lists[part], counts[part]);
     slabSegments_ = kSlabCount;
-    appendLarge(crossing_);
 }
 
 }  // namespace rubble::detail

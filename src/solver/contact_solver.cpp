@@ -12,7 +12,7 @@
 namespace rubble::detail {
 namespace {
 
-constexpr std::size_t kBodyChunk = 4096;
+constexpr std::size_t kBodyChunk = 1024;
 constexpr std::size_t kManifoldChunk = 1024;
 /// Batches per task inside a colour: small enough that two threads share a colour of a few thousand manifolds,
 /// large enough that a task outweighs its dispatch.
@@ -137,6 +137,15 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     const StaticBodies& s = storage.statics;
     const std::size_t manifoldCount = contacts.manifolds.size();
 
+    traits_.resize(manifoldCount);
+    pool.forChunks(manifoldCount, kManifoldChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const ContactPair& p = contacts.pairs[k];
+            traits_[k] = static_cast<std::uint8_t>(
+                contacts.manifolds[k].pointCount | (!p.aStatic && isDynamicBody(m, p.a) ? kTraitDynamicA : 0) |
+                (!p.bStatic && isDynamicBody(m, p.b) ? kTraitDynamicB : 0));
+        }
+    });
     partition(contacts, islands, m);
 
     // Solver indices in order of first appearance, segment by segment (a block's bodies get neighbouring rows), and
@@ -193,7 +202,8 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         for (const std::uint32_t* it = first; it != last; ++it) {
             const std::uint32_t k = *it;
             const ContactPair& p = contacts.pairs[k];
-            const bool dynA = !p.aStatic && isDynamic(p.a), dynB = !p.bStatic && isDynamic(p.b);
+            const std::uint8_t traits = traits_[k];
+            const bool dynA = (traits & kTraitDynamicA) != 0, dynB = (traits & kTraitDynamicB) != 0;
             if ((!dynA && !dynB) || (jointFilter && jointed(p))) {
                 colorOf_[k] = kNoColor;
                 continue;
@@ -213,7 +223,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
             }
             colorOf_[k] = color;
             colorCounts[color] += 1;
-            pointCounts[color][contacts.manifolds[k].pointCount] += 1;
+            pointCounts[color][traits & kTraitPoints] += 1;
             constraints += 1;
         }
         // Every colour starts a fresh batch; the overflow colour comes last.
@@ -253,7 +263,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         for (const std::uint32_t* it = first; it != last; ++it) {
             const std::uint32_t c = colorOf_[*it];
             if (c == kNoColor) continue;
-            const int points = contacts.manifolds[*it].pointCount;
+            const int points = traits_[*it] & kTraitPoints;
             const std::size_t slot =
                 std::size_t{colorFirstBatch[c]} * kBatchLanes + filled[c][c == kOverflowColor ? 0 : points]++;
             manifoldOfLane_[slot] = *it;
@@ -289,19 +299,28 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         largeColors > 0 ? static_cast<float>(largeBatches) / static_cast<float>(largeColors) : INFINITY;
     // Body rows: the touched bodies, the still row, one scratch row per worker.
     const std::size_t rows = bodyCount + 1 + static_cast<std::size_t>(scratchRows_);
-    for (auto* a : {&bodies_.velocity, &bodies_.motion, &bodies_.pseudo}) a->assign(rows, BodyRow{});
-    bodies_.mass.assign(rows, MassRow{});
+    // Every row starts at rest, and a body that is not dynamic keeps a zero mass row (it cannot be moved); the
+    // touched bodies' rows are cleared in the parallel loop, the still and scratch rows here.
+    for (auto* a : {&bodies_.velocity, &bodies_.motion, &bodies_.pseudo}) {
+        a->resize(rows);
+        std::fill(a->begin() + bodyCount, a->end(), BodyRow{});
+    }
+    bodies_.mass.resize(rows);
+    std::fill(bodies_.mass.begin() + bodyCount, bodies_.mass.end(), MassRow{});
     for (auto* a : {&p0x_, &p0y_, &p0z_, &q0x_, &q0y_, &q0z_, &q0w_}) a->resize(bodyCount);
     pool.forChunks(bodyCount, kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t i = begin; i < end; ++i) {
             const std::uint32_t d = bodies_.moving[i];
             p0x_[i] = m.px[d], p0y_[i] = m.py[d], p0z_[i] = m.pz[d];
             q0x_[i] = m.qx[d], q0y_[i] = m.qy[d], q0z_[i] = m.qz[d], q0w_[i] = m.qw[d];
-            if (!isDynamic(d)) continue;
-            MassRow& row = bodies_.mass[i];
-            row.inverseMass = m.invMass[d];
-            if (rotation_)
-                row = {{m.iwXX[d], m.iwYY[d], m.iwZZ[d], m.iwXY[d], m.iwXZ[d], m.iwYZ[d]}, m.invMass[d], 0.0f};
+            bodies_.velocity[i] = bodies_.motion[i] = bodies_.pseudo[i] = BodyRow{};
+            MassRow row{};
+            if (isDynamic(d)) {
+                row.inverseMass = m.invMass[d];
+                if (rotation_)
+                    row = {{m.iwXX[d], m.iwYY[d], m.iwZZ[d], m.iwXY[d], m.iwXZ[d], m.iwYZ[d]}, m.invMass[d], 0.0f};
+            }
+            bodies_.mass[i] = row;
         }
     });
 

@@ -39,6 +39,8 @@ struct Islands;
 inline bool isDynamicBody(const MovingBodies& m, std::uint32_t dense) {
     return (m.flags[dense] & (kFlagKinematic | kFlagFrozen | kFlagAsleep)) == 0 && m.invMass[dense] > 0;
 }
+/// Bits of ContactSolver's per-manifold traits: the point count, and which sides are dynamic bodies.
+inline constexpr std::uint8_t kTraitPoints = 0x7, kTraitDynamicA = 0x8, kTraitDynamicB = 0x10;
 /// Before colouring, segmentOfIsland_ names segments; this one is the large islands'.
 inline constexpr std::uint32_t kLargeSegment = ~0u;
 
@@ -250,13 +252,16 @@ private:
     std::vector<std::uint32_t> largePart_;         ///< manifolds in no block
     std::vector<Vec3> slabPlaces_;                 ///< where every 8th manifold of largePart_ lies
     std::vector<float> slabKeys_;                  ///< those places along the cut's axis
-    std::vector<std::uint32_t> slabParts_[2], crossing_;  ///< largePart_ split (see splitIntoSlabs)
+    std::vector<std::uint32_t> slabParts_[3];  ///< largePart_ split: two slabs, then the crossing manifolds
     std::size_t slabSegments_ = 0;                        ///< segments before the last that are slabs
     float largeBatchesPerColor_ = INFINITY;               ///< last step's, for the choice of slabs
     std::vector<std::uint32_t> blockOfSegment_;  ///< prepare scratch: a segment's block, if it kept constraints
     std::vector<std::int32_t> solverIndex_;      ///< dense index of a moving body -> solver index, -1 if untouched
     std::vector<std::uint64_t> bodyColors_;      ///< per solver index: colours that already hold the body
     std::vector<std::uint32_t> colorOf_;
+    /// Per manifold, what partitioning and colouring read of it (see ManifoldTraits in the .cpp), gathered in
+    /// parallel so that the serial passes read one byte, not a manifold's cache line and two bodies' flags.
+    std::vector<std::uint8_t> traits_;
     std::vector<std::uint8_t> movedInChunk_;  ///< loadBodies: whether a chunk of bodies moved since prepare()
     AlignedVector<float> p0x_, p0y_, p0z_, q0x_, q0y_, q0z_, q0w_;  ///< pose at prepare(), by solver index
 };
