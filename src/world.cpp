@@ -640,7 +640,7 @@ void World::step(float dt) {
                 if (solver.warmStarting && solver.seedRestingLoads && w.effects.has(Effect::Gravity))
                     profile.seededManifolds =
                         w.restingLoads.seed(w.contacts, w.contactCache.carried(), w.bodies.moving,
-                                            {w.settings.gravity, params.dt, solver.linearSlop}, w.impulses);
+                                            {w.settings.gravity, params.dt, solver.linearSlop}, *w.pool, w.impulses);
             }
             profile.matchedManifolds = w.contactCache.matchedManifolds();
             profile.warmStartedPoints = w.contactCache.matchedPoints();

@@ -8,6 +8,9 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+
+#include "parallel.h"
 
 namespace rubble::detail {
 namespace {
@@ -19,6 +22,8 @@ constexpr std::uint32_t kNotResting = ~0u;
 constexpr float kMinSupportCosine = 0.25f;
 /// Rounds of the active set: points that came out pulling are dropped and the rest solved again.
 constexpr int kActiveSetRounds = 4;
+/// Manifolds per task of the scan for supports.
+constexpr std::size_t kManifoldChunk = 2048;
 
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
@@ -51,7 +56,7 @@ void balance(std::vector<SupportPoint>& points, const Vec6& wanted) {
 }  // namespace
 
 std::uint32_t RestingLoads::seed(const Contacts& contacts, std::span<const std::uint8_t> carried,
-                                 const MovingBodies& bodies, const RestingLoadParams& params,
+                                 const MovingBodies& bodies, const RestingLoadParams& params, TaskPool& pool,
                                  std::vector<PointImpulse>& impulses) {
     const float g = length(params.gravity);
     if (!(g > 0) || !(params.h > 0)) return 0;
@@ -86,13 +91,21 @@ std::uint32_t RestingLoads::seed(const Contacts& contacts, std::span<const std::
         return true;
     };
     const auto isCarried = [&](std::size_t m) { return m < carried.size() && carried[m] != 0; };
+    // The first manifold from m on that carried nothing. Most manifolds carry their impulses: memchr jumps to the
+    // next one that does not.
+    const std::size_t carriedCount = std::min(carried.size(), manifoldCount);
+    const auto nextNew = [&](std::size_t m) {
+        if (m >= carriedCount) return m;
+        const void* zero = std::memchr(carried.data() + m, 0, carriedCount - m);
+        return zero ? static_cast<std::size_t>(static_cast<const std::uint8_t*>(zero) - carried.data()) : carriedCount;
+    };
 
     // The bodies that rest on a new contact, top down.
     if (restingOf_.size() != bodyCount) restingOf_.assign(bodyCount, kNotResting);
     resting_.clear();
-    for (std::size_t m = 0; m < manifoldCount; ++m) {
+    for (std::size_t m = nextNew(0); m < manifoldCount; m = nextNew(m + 1)) {
         Support s;
-        if (isCarried(m) || !supportOf(m, s)) continue;
+        if (!supportOf(m, s)) continue;
         if (restingOf_[s.upper] == kNotResting) {
             restingOf_[s.upper] = 0;
             resting_.push_back(s.upper);
@@ -105,24 +118,34 @@ std::uint32_t RestingLoads::seed(const Contacts& contacts, std::span<const std::
     });
     for (std::size_t k = 0; k < resting_.size(); ++k) restingOf_[resting_[k]] = static_cast<std::uint32_t>(k);
 
-    // Each resting body's supports, and the supports through which something rests on it, grouped by body.
-    supports_.clear();
-    links_.clear();
+    // Each resting body's supports, and the supports through which something rests on it, grouped by body. Every
+    // manifold is looked at, in parallel; the supports found are taken in manifold order.
     const auto resting = [&](std::uint32_t index, bool isStatic) {
         return !isStatic && restingOf_[index] != kNotResting;
     };
-    for (std::size_t m = 0; m < manifoldCount; ++m) {
-        const ContactPair& p = contacts.pairs[m];
-        Support s;
-        if ((!resting(p.a, p.aStatic) && !resting(p.b, p.bStatic)) || !supportOf(m, s)) continue;
-        const std::uint32_t upper = restingOf_[s.upper];
-        const std::uint32_t lower = s.lower == kFixed ? kNotResting : restingOf_[s.lower];
-        if (upper == kNotResting && lower == kNotResting) continue;
-        const auto at = static_cast<std::uint32_t>(supports_.size());
-        supports_.push_back(s);
-        if (upper != kNotResting) links_.push_back({upper, at, false});
-        if (lower != kNotResting) links_.push_back({lower, at, true});
-    }
+    const std::size_t chunks = TaskPool::chunkCount(manifoldCount, kManifoldChunk);
+    if (chunkSupports_.size() < chunks) chunkSupports_.resize(chunks);
+    pool.forChunks(manifoldCount, kManifoldChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
+        std::vector<Support>& found = chunkSupports_[c];
+        found.clear();
+        for (std::size_t m = begin; m < end; ++m) {
+            const ContactPair& p = contacts.pairs[m];
+            Support s;
+            if ((resting(p.a, p.aStatic) || resting(p.b, p.bStatic)) && supportOf(m, s)) found.push_back(s);
+        }
+    });
+    supports_.clear();
+    links_.clear();
+    for (std::size_t c = 0; c < chunks; ++c)
+        for (const Support& s : chunkSupports_[c]) {
+            const std::uint32_t upper = restingOf_[s.upper];
+            const std::uint32_t lower = s.lower == kFixed ? kNotResting : restingOf_[s.lower];
+            if (upper == kNotResting && lower == kNotResting) continue;
+            const auto at = static_cast<std::uint32_t>(supports_.size());
+            supports_.push_back(s);
+            if (upper != kNotResting) links_.push_back({upper, at, false});
+            if (lower != kNotResting) links_.push_back({lower, at, true});
+        }
     linkStart_.assign(resting_.size() + 1, 0);
     for (const Link& l : links_) ++linkStart_[l.body + 1];
     for (std::size_t k = 0; k < resting_.size(); ++k) linkStart_[k + 1] += linkStart_[k];

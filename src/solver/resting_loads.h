@@ -18,6 +18,8 @@
 
 namespace rubble::detail {
 
+class TaskPool;
+
 struct RestingLoadParams {
     Vec3 gravity;
     float h = 0;  ///< time over which an impulse acts (the substep), s
@@ -29,10 +31,11 @@ class RestingLoads {
 public:
     /// Writes normal impulses for the touching points of every manifold that carried nothing from last step
     /// (`carried[m] == 0`) and through which a dynamic body rests on something lower, along gravity. Other
-    /// manifolds keep their impulses and count as they are for the loads they pass down. Serial: two scans of the
-    /// manifolds, then only the bodies that rest on a new contact, top down. Returns the number of manifolds it wrote.
+    /// manifolds keep their impulses and count as they are for the loads they pass down. A jump from one new manifold
+    /// to the next, a parallel scan of all manifolds for the supports of the bodies found, then only those bodies,
+    /// top down, on one thread. Returns the number of manifolds it wrote.
     std::uint32_t seed(const Contacts& contacts, std::span<const std::uint8_t> carried, const MovingBodies& bodies,
-                       const RestingLoadParams& params, std::vector<PointImpulse>& impulses);
+                       const RestingLoadParams& params, TaskPool& pool, std::vector<PointImpulse>& impulses);
 
 private:
     /// A manifold through which `upper` rests on `lower` (~0u: a static or kinematic body), both dense indices.
@@ -50,6 +53,7 @@ private:
     std::vector<std::uint32_t> restingOf_;  ///< per moving body: index into resting_, or ~0u
     std::vector<std::uint32_t> resting_;    ///< bodies resting on a new contact, top down
     std::vector<Support> supports_;
+    std::vector<std::vector<Support>> chunkSupports_;  ///< the parallel scan's finds, per chunk of manifolds
     std::vector<Link> links_, grouped_;  ///< links by body: links_[linkStart_[k], linkStart_[k + 1])
     std::vector<std::uint32_t> linkStart_, linkFill_;
     /// A touching point of the body being balanced: the direction its force pushes along and that force's torque
