@@ -13,7 +13,7 @@ namespace {
 using simd::FloatW;
 using simd::Vec3W;
 
-constexpr std::size_t kChunkSize = 8192;
+constexpr std::size_t kChunkSize = 2048;
 static_assert(kChunkSize % simd::kLanes == 0, "chunks must hold whole batches");
 
 Aabb transformedBox(const Aabb& local, const Transform& pose) {

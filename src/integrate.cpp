@@ -40,7 +40,7 @@ using simd::Vec3W;
 
 /// Bodies per parallel chunk: a multiple of the lane count, so only the last chunk has a scalar tail and the
 /// result never depends on how chunks are spread over threads.
-constexpr std::size_t kChunkSize = 4096;
+constexpr std::size_t kChunkSize = 2048;
 static_assert(kChunkSize % simd::kLanes == 0, "chunks must hold whole batches");
 
 template <class F>
