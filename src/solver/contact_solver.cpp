@@ -141,9 +141,9 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     pool.forChunks(manifoldCount, kManifoldChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t k = begin; k < end; ++k) {
             const ContactPair& p = contacts.pairs[k];
-            traits_[k] = static_cast<std::uint8_t>(
-                contacts.manifolds[k].pointCount | (!p.aStatic && isDynamicBody(m, p.a) ? kTraitDynamicA : 0) |
-                (!p.bStatic && isDynamicBody(m, p.b) ? kTraitDynamicB : 0));
+            traits_[k] = static_cast<std::uint8_t>(contacts.manifolds[k].pointCount |
+                                                   (!p.aStatic && isDynamicBody(m, p.a) ? kTraitDynamicA : 0) |
+                                                   (!p.bStatic && isDynamicBody(m, p.b) ? kTraitDynamicB : 0));
         }
     });
     partition(contacts, islands, m);

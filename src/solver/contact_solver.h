@@ -252,12 +252,12 @@ private:
     std::vector<std::uint32_t> largePart_;         ///< manifolds in no block
     std::vector<Vec3> slabPlaces_;                 ///< where every 8th manifold of largePart_ lies
     std::vector<float> slabKeys_;                  ///< those places along the cut's axis
-    std::vector<std::uint32_t> slabParts_[3];  ///< largePart_ split: two slabs, then the crossing manifolds
-    std::size_t slabSegments_ = 0;                        ///< segments before the last that are slabs
-    float largeBatchesPerColor_ = INFINITY;               ///< last step's, for the choice of slabs
-    std::vector<std::uint32_t> blockOfSegment_;  ///< prepare scratch: a segment's block, if it kept constraints
-    std::vector<std::int32_t> solverIndex_;      ///< dense index of a moving body -> solver index, -1 if untouched
-    std::vector<std::uint64_t> bodyColors_;      ///< per solver index: colours that already hold the body
+    std::vector<std::uint32_t> slabParts_[3];      ///< largePart_ split: two slabs, then the crossing manifolds
+    std::size_t slabSegments_ = 0;                 ///< segments before the last that are slabs
+    float largeBatchesPerColor_ = INFINITY;        ///< last step's, for the choice of slabs
+    std::vector<std::uint32_t> blockOfSegment_;    ///< prepare scratch: a segment's block, if it kept constraints
+    std::vector<std::int32_t> solverIndex_;        ///< dense index of a moving body -> solver index, -1 if untouched
+    std::vector<std::uint64_t> bodyColors_;        ///< per solver index: colours that already hold the body
     std::vector<std::uint32_t> colorOf_;
     /// Per manifold, what partitioning and colouring read of it (see ManifoldTraits in the .cpp), gathered in
     /// parallel so that the serial passes read one byte, not a manifold's cache line and two bodies' flags.

@@ -54,7 +54,7 @@ private:
     std::vector<std::uint32_t> resting_;    ///< bodies resting on a new contact, top down
     std::vector<Support> supports_;
     std::vector<std::vector<Support>> chunkSupports_;  ///< the parallel scan's finds, per chunk of manifolds
-    std::vector<Link> links_, grouped_;  ///< links by body: links_[linkStart_[k], linkStart_[k + 1])
+    std::vector<Link> links_, grouped_;                ///< links by body: links_[linkStart_[k], linkStart_[k + 1])
     std::vector<std::uint32_t> linkStart_, linkFill_;
     /// A touching point of the body being balanced: the direction its force pushes along and that force's torque
     /// about the centre of mass, and the force found (>= 0).

@@ -187,9 +187,8 @@ TEST(RestingLoads, APileOfColumnsSeedsTheSameOnAnyThreadCount) {
     const float masses[3] = {4, 2, 1};
     for (int layer = 0; layer < 3; ++layer)
         for (int i = 0; i < kSide * kSide; ++i)
-            layers[layer].push_back(s.body({static_cast<float>(i % kSide) * 2, layer + 0.5f,
-                                            static_cast<float>(i / kSide) * 2},
-                                           masses[layer]));
+            layers[layer].push_back(s.body(
+                {static_cast<float>(i % kSide) * 2, layer + 0.5f, static_cast<float>(i / kSide) * 2}, masses[layer]));
     std::vector<std::size_t> contactsOf[3];
     for (int layer = 0; layer < 3; ++layer)
         for (int i = 0; i < kSide * kSide; ++i) {
