@@ -14,6 +14,7 @@
 #include "parallel.h"
 #include "shapes/mesh_adjacency.h"
 #include "simd/simd.h"
+#include "simd/transpose.h"
 #include "simd/vec.h"
 
 namespace rubble::detail {
@@ -26,6 +27,13 @@ using simd::Vec3W;
 constexpr std::size_t kChunk = 256;
 /// Chunks per task when their results are copied to the output.
 constexpr std::size_t kMergeChunks = 8;
+
+/// Moving bodies per task when their rows are written.
+constexpr std::size_t kRowChunk = 1024;
+/// Columns of MovingRows' pose and motion rows.
+enum PoseColumn : std::size_t { kComX, kComY, kComZ, kRotX, kRotY, kRotZ, kRotW, kLocalComX };
+enum MotionColumn : std::size_t { kVelX, kVelY, kVelZ, kSpinX, kSpinY, kSpinZ, kLocalComY, kLocalComZ };
+static_assert(kLocalComX + 1 == simd::kRowFloats && kLocalComZ + 1 == simd::kRowFloats, "rows hold eight floats");
 
 /// Pairs the batched kernels take at a time: four SIMD batches, so that their lanes and manifolds stay in L1.
 constexpr std::size_t kBlock = 64;
@@ -72,22 +80,28 @@ struct Posed {
 
 // Always inlined, as posedSide: returned through memory, the pose is written in pieces and read back whole, which
 // stalls on store forwarding in the per-pair loop.
-[[gnu::always_inline]] inline Posed posed(const BodyStorage& storage, const std::vector<Shape>& shapes, std::uint32_t i,
-                                          bool isStatic) {
+[[gnu::always_inline]] inline const float* rowOf(const AlignedVector<float>& rows, std::uint32_t i) {
+    return rows.data() + std::size_t{i} * simd::kRowFloats;
+}
+
+[[gnu::always_inline]] inline Posed posed(const BodyStorage& storage, const MovingRows& rows,
+                                          const std::vector<Shape>& shapes, std::uint32_t i, bool isStatic) {
     if (isStatic) {
         const StaticBodies& s = storage.statics;
         return {{{s.px[i], s.py[i], s.pz[i]}, {s.qx[i], s.qy[i], s.qz[i], s.qw[i]}}, &shapes[s.shape[i]]};
     }
-    const MovingBodies& m = storage.moving;
-    const Quat q{m.qx[i], m.qy[i], m.qz[i], m.qw[i]};
-    const Vec3 origin = Vec3{m.px[i], m.py[i], m.pz[i]} - rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]});
-    return {{origin, q}, &shapes[m.shape[i]]};
+    const float* pose = rowOf(rows.pose, i);
+    const float* motion = rowOf(rows.motion, i);
+    const Quat q{pose[kRotX], pose[kRotY], pose[kRotZ], pose[kRotW]};
+    const Vec3 origin = Vec3{pose[kComX], pose[kComY], pose[kComZ]} -
+                        rotate(q, {pose[kLocalComX], motion[kLocalComY], motion[kLocalComZ]});
+    return {{origin, q}, &shapes[storage.moving.shape[i]]};
 }
 
 /// A side of a contact pair: the body's shape, or the compound child the pair names, posed in the world.
-[[gnu::always_inline]] inline Posed posedSide(const BodyStorage& storage, const std::vector<Shape>& shapes,
-                                              const ContactPair& p, bool sideB) {
-    Posed body = sideB ? posed(storage, shapes, p.b, p.bStatic) : posed(storage, shapes, p.a, p.aStatic);
+[[gnu::always_inline]] inline Posed posedSide(const BodyStorage& storage, const MovingRows& rows,
+                                              const std::vector<Shape>& shapes, const ContactPair& p, bool sideB) {
+    Posed body = sideB ? posed(storage, rows, shapes, p.b, p.bStatic) : posed(storage, rows, shapes, p.a, p.aStatic);
     const std::uint16_t child = sideB ? p.childB : p.childA;
     if (child == kNoChild) return body;
     const CompoundChild& c = body.shape->children[child];
@@ -149,11 +163,14 @@ struct MeshSide {
 
 /// Centre of a sphere side. A whole moving sphere's centre is its centre of mass, so only the position rows are
 /// read: the common case (S4) then touches 3 arrays per side instead of every pose array.
-Vec3 sphereCenter(const BodyStorage& storage, const std::vector<Shape>& shapes, const ContactPair& p, bool sideB) {
+Vec3 sphereCenter(const BodyStorage& storage, const MovingRows& rows, const std::vector<Shape>& shapes,
+                  const ContactPair& p, bool sideB) {
     const std::uint32_t i = sideB ? p.b : p.a;
-    if (!(sideB ? p.bStatic : p.aStatic) && (sideB ? p.childB : p.childA) == kNoChild)
-        return {storage.moving.px[i], storage.moving.py[i], storage.moving.pz[i]};
-    return posedSide(storage, shapes, p, sideB).pose.position;
+    if (!(sideB ? p.bStatic : p.aStatic) && (sideB ? p.childB : p.childA) == kNoChild) {
+        const float* pose = rowOf(rows.pose, i);
+        return {pose[kComX], pose[kComY], pose[kComZ]};
+    }
+    return posedSide(storage, rows, shapes, p, sideB).pose.position;
 }
 
 /// The capsule-box kernel sees the capsule as A; the stage's order has the box first. Same contact seen from the
@@ -348,11 +365,14 @@ struct Motion {
     F reach = F(0.0f);
 };
 
-Motion<float> motionOf(const BodyStorage& storage, const ShapeTables& tables, const ContactPair& p, bool sideB) {
+Motion<float> motionOf(const BodyStorage& storage, const MovingRows& rows, const ShapeTables& tables,
+                       const ContactPair& p, bool sideB) {
     if (sideB ? p.bStatic : p.aStatic) return {};
-    const MovingBodies& m = storage.moving;
     const std::uint32_t i = sideB ? p.b : p.a;
-    return {{m.vx[i], m.vy[i], m.vz[i]}, {m.wx[i], m.wy[i], m.wz[i]}, tables.reach[m.shape[i]]};
+    const float* motion = rowOf(rows.motion, i);
+    return {{motion[kVelX], motion[kVelY], motion[kVelZ]},
+            {motion[kSpinX], motion[kSpinY], motion[kSpinZ]},
+            tables.reach[storage.moving.shape[i]]};
 }
 
 /// The size columns of ShapeTables for a shape (see there).
@@ -385,8 +405,8 @@ enum class SideSource { Moving, Static, Mixed };
 /// origin from the centre of mass (com - R lc, as posed() computes it), except that a sphere is at its centre of
 /// mass (as sphereCenter() has it).
 [[gnu::flatten]] SideLanes gatherSide(const NarrowPhaseStage::Chunk& chunk, const std::uint32_t* jobs, bool sideB,
-                                      SideForm form, const BodyStorage& storage, const std::vector<Shape>& shapes,
-                                      const ShapeTables& tables) {
+                                      SideForm form, const BodyStorage& storage, const MovingRows& rows,
+                                      const std::vector<Shape>& shapes, const ShapeTables& tables) {
     using simd::IntW;
     alignas(64) std::int32_t body[simd::kLanes], shape[simd::kLanes];
     bool allMoving = true, allStatic = true, oneShape = true;
@@ -417,12 +437,17 @@ enum class SideSource { Moving, Static, Mixed };
                                  simd::gather(z.data(), index)};
         };
         if (source == SideSource::Moving) {
-            side.position = vec(m.px, m.py, m.pz);
-            side.q = {simd::gather(m.qx.data(), index), simd::gather(m.qy.data(), index),
-                      simd::gather(m.qz.data(), index), simd::gather(m.qw.data(), index)};
+            FloatW pose[simd::kRowFloats], motion[simd::kRowFloats];
+            simd::loadRowsTransposed(rows.pose.data(), body, pose);
+            simd::loadRowsTransposed(rows.motion.data(), body, motion);
+            side.position = {pose[kComX], pose[kComY], pose[kComZ]};
+            side.q = {pose[kRotX], pose[kRotY], pose[kRotZ], pose[kRotW]};
             if (form != SideForm::Sphere)
-                side.position = side.position - simd::rotate(side.q, vec(m.lcx, m.lcy, m.lcz));
-            side.motion = {vec(m.vx, m.vy, m.vz), vec(m.wx, m.wy, m.wz), perShape(tables.reach)};
+                side.position = side.position - simd::rotate(side.q, Vec3W<FloatW>{pose[kLocalComX], motion[kLocalComY],
+                                                                                   motion[kLocalComZ]});
+            side.motion = {{motion[kVelX], motion[kVelY], motion[kVelZ]},
+                           {motion[kSpinX], motion[kSpinY], motion[kSpinZ]},
+                           perShape(tables.reach)};
         } else {
             side.position = vec(st.px, st.py, st.pz);
             side.q = {simd::gather(st.qx.data(), index), simd::gather(st.qy.data(), index),
@@ -435,11 +460,12 @@ enum class SideSource { Moving, Static, Mixed };
     alignas(64) float lanes[17][simd::kLanes];
     for (std::size_t k = 0; k < simd::kLanes; ++k) {
         const ContactPair& p = chunk.jobs[jobs[k]].pair;
-        const Posed posed = posedSide(storage, shapes, p, sideB);
-        const Vec3 position = form == SideForm::Sphere ? sphereCenter(storage, shapes, p, sideB) : posed.pose.position;
+        const Posed posed = posedSide(storage, rows, shapes, p, sideB);
+        const Vec3 position =
+            form == SideForm::Sphere ? sphereCenter(storage, rows, shapes, p, sideB) : posed.pose.position;
         const Quat q = posed.pose.rotation;
         const Vec3 size = sizeOf(*posed.shape);
-        const Motion<float> motion = motionOf(storage, tables, p, sideB);
+        const Motion<float> motion = motionOf(storage, rows, tables, p, sideB);
         const float values[17] = {position.x, position.y, position.z, q.x,        q.y,         q.z,
                                   q.w,        size.x,     size.y,     size.z,     motion.v.x,  motion.v.y,
                                   motion.v.z, motion.w.x, motion.w.y, motion.w.z, motion.reach};
@@ -457,12 +483,13 @@ enum class SideSource { Moving, Static, Mixed };
 /// Pairs [k0, k0 + kLanes) of a block into its input lanes; `jobs` holds the block's jobs, `count` of them valid
 /// (lanes past the end repeat the last job, so every gather reads a real body; their results are not used).
 void gatherBatch(const NarrowPhaseStage::Chunk& chunk, const std::uint32_t* jobs, std::size_t count, std::size_t k0,
-                 SideForm formA, SideForm formB, const BodyStorage& storage, const std::vector<Shape>& shapes,
-                 const ShapeTables& tables, const NarrowPhaseParams& params, NarrowPhaseStage::Scratch& s) {
+                 SideForm formA, SideForm formB, const BodyStorage& storage, const MovingRows& rows,
+                 const std::vector<Shape>& shapes, const ShapeTables& tables, const NarrowPhaseParams& params,
+                 NarrowPhaseStage::Scratch& s) {
     std::uint32_t batch[simd::kLanes];
     for (std::size_t k = 0; k < simd::kLanes; ++k) batch[k] = jobs[std::min(k0 + k, count - 1)];
-    const SideLanes a = gatherSide(chunk, batch, false, formA, storage, shapes, tables);
-    const SideLanes b = gatherSide(chunk, batch, true, formB, storage, shapes, tables);
+    const SideLanes a = gatherSide(chunk, batch, false, formA, storage, rows, shapes, tables);
+    const SideLanes b = gatherSide(chunk, batch, true, formB, storage, rows, shapes, tables);
     for (const auto& [side, form, base] : {std::tuple{&a, formA, std::size_t{0}}, std::tuple{&b, formB, kSideB}}) {
         side->position.store(s.in[base + kPx], s.in[base + kPy], s.in[base + kPz], k0);
         side->size.store(s.in[base + kSx], s.in[base + kSy], s.in[base + kSz], k0);
@@ -482,8 +509,8 @@ void gatherBatch(const NarrowPhaseStage::Chunk& chunk, const std::uint32_t* jobs
 /// lanes, margins in SIMD, then the kernel. Box-box writes each job's manifold in place; the closed-form kernels
 /// leave SoA results that are copied into the jobs' manifolds.
 void collideBatched(Batched kernel, const std::vector<std::uint32_t>& list, NarrowPhaseStage::Chunk& chunk,
-                    NarrowPhaseStage::Scratch& s, const BodyStorage& storage, const std::vector<Shape>& shapes,
-                    const ShapeTables& tables, const NarrowPhaseParams& params) {
+                    NarrowPhaseStage::Scratch& s, const BodyStorage& storage, const MovingRows& rows,
+                    const std::vector<Shape>& shapes, const ShapeTables& tables, const NarrowPhaseParams& params) {
     const auto& in = s.in;
     const std::size_t b = kSideB;
     const float* margin = in[kMarginLane];
@@ -499,7 +526,7 @@ void collideBatched(Batched kernel, const std::vector<std::uint32_t>& list, Narr
         const std::uint32_t* jobs = list.data() + first;
         const std::size_t n = std::min(kBlock, list.size() - first);
         for (std::size_t k0 = 0; k0 < n; k0 += simd::kLanes)
-            gatherBatch(chunk, jobs, n, k0, formA, formB, storage, shapes, tables, params, s);
+            gatherBatch(chunk, jobs, n, k0, formA, formB, storage, rows, shapes, tables, params, s);
         switch (kernel) {
             case Batched::BoxBox:
                 collideBoxesBatch(
@@ -612,10 +639,29 @@ void NarrowPhaseStage::prepareShapes(const std::vector<Shape>& shapes) {
     }
 }
 
+void NarrowPhaseStage::prepareRows(const MovingBodies& m, TaskPool& pool) {
+    const std::size_t n = m.size();
+    rows_.pose.resize(n * simd::kRowFloats);
+    rows_.motion.resize(n * simd::kRowFloats);
+    pool.forChunks(n, kRowChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t i = begin; i < end; ++i) {
+            float* pose = rows_.pose.data() + i * simd::kRowFloats;
+            float* motion = rows_.motion.data() + i * simd::kRowFloats;
+            pose[kComX] = m.px[i], pose[kComY] = m.py[i], pose[kComZ] = m.pz[i];
+            pose[kRotX] = m.qx[i], pose[kRotY] = m.qy[i], pose[kRotZ] = m.qz[i], pose[kRotW] = m.qw[i];
+            pose[kLocalComX] = m.lcx[i];
+            motion[kVelX] = m.vx[i], motion[kVelY] = m.vy[i], motion[kVelZ] = m.vz[i];
+            motion[kSpinX] = m.wx[i], motion[kSpinY] = m.wy[i], motion[kSpinZ] = m.wz[i];
+            motion[kLocalComY] = m.lcy[i], motion[kLocalComZ] = m.lcz[i];
+        }
+    });
+}
+
 void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& storage,
                            const std::vector<Shape>& shapes, const NarrowPhaseParams& params, TaskPool& pool,
                            Contacts& out) {
     prepareShapes(shapes);
+    prepareRows(storage.moving, pool);
     while (scratch_.size() < static_cast<std::size_t>(pool.threadCount()))
         scratch_.push_back(std::make_unique<Scratch>());
 
@@ -656,16 +702,20 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             now.slots = (std::uint64_t{slot1} << 32) | slot2;
             now.generations = (std::uint64_t{slots[slot1].generation} << 32) | slots[slot2].generation;
             now.shapeFirst = shape1, now.shapeSecond = shape2;
-            now.first = {{m.px[first], m.py[first], m.pz[first]}, {m.qx[first], m.qy[first], m.qz[first], m.qw[first]}};
+            const auto movingPose = [&](std::uint32_t i) {
+                const float* pose = rowOf(rows_.pose, i);
+                return BodyPose{{pose[kComX], pose[kComY], pose[kComZ]},
+                                {pose[kRotX], pose[kRotY], pose[kRotZ], pose[kRotW]}};
+            };
+            now.first = movingPose(first);
             if (secondStatic)
                 now.second = {{st.px[second], st.py[second], st.pz[second]},
                               {st.qx[second], st.qy[second], st.qz[second], st.qw[second]}};
             else
-                now.second = {{m.px[second], m.py[second], m.pz[second]},
-                              {m.qx[second], m.qy[second], m.qz[second], m.qw[second]}};
+                now.second = movingPose(second);
             const ContactPair asPair{first, second, false, secondStatic};
-            const Motion<float> motion1 = motionOf(storage, tables_, asPair, false);
-            const Motion<float> motion2 = motionOf(storage, tables_, asPair, true);
+            const Motion<float> motion1 = motionOf(storage, rows_, tables_, asPair, false);
+            const Motion<float> motion2 = motionOf(storage, rows_, tables_, asPair, true);
             now.margin = speculativeMargin<float>(params, motion1.v, motion1.w, motion1.reach, motion2.v, motion2.w,
                                                   motion2.reach);
             const ManifoldReuse::Finder::Found found = finder.find(now.order);
@@ -911,12 +961,12 @@ void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorag
             continue;
         }
         const ContactPair& p = job.pair;
-        const Motion<float> motionA = motionOf(storage, tables_, p, false);
-        const Motion<float> motionB = motionOf(storage, tables_, p, true);
+        const Motion<float> motionA = motionOf(storage, rows_, tables_, p, false);
+        const Motion<float> motionB = motionOf(storage, rows_, tables_, p, true);
         const float margin =
             speculativeMargin<float>(params, motionA.v, motionA.w, motionA.reach, motionB.v, motionB.w, motionB.reach);
-        const Posed a = posedSide(storage, shapes, p, false);
-        const Posed b = posedSide(storage, shapes, p, true);
+        const Posed a = posedSide(storage, rows_, shapes, p, false);
+        const Posed b = posedSide(storage, rows_, shapes, p, true);
         if (job.triangles == 0) {
             collide(job.kernel, a, b, margin, hullAdjacency_, chunk.manifolds[j]);
             continue;
@@ -930,8 +980,8 @@ void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorag
     }
     for (int kernel = 0; kernel < static_cast<int>(Batched::Count); ++kernel)
         if (!scratch.batched[kernel].empty())
-            collideBatched(static_cast<Batched>(kernel), scratch.batched[kernel], chunk, scratch, storage, shapes,
-                           tables_, params);
+            collideBatched(static_cast<Batched>(kernel), scratch.batched[kernel], chunk, scratch, storage, rows_,
+                           shapes, tables_, params);
 
     // Counted in locals: the compiler cannot keep the chunk's fields in registers across the loop.
     std::uint32_t touching = static_cast<std::uint32_t>(chunk.meshManifolds.size()), points = 0;
