@@ -109,6 +109,7 @@ BodyId BodyStorage::allocate(BodySet set, std::uint32_t& denseOut) {
         slotIndex = static_cast<std::uint32_t>(slots_.size());
         slots_.push_back({});
     }
+    ++layoutChanges_;
     BodySlot& slot = slots_[slotIndex];
     slot.generation += 1;
     if (slot.generation == 0) slot.generation = 1;  // 0 is the null handle; wrapping after 4 billion reuses is fine
@@ -124,6 +125,7 @@ BodyId BodyStorage::allocate(BodySet set, std::uint32_t& denseOut) {
 }
 
 void BodyStorage::release(BodyId id) {
+    ++layoutChanges_;
     BodySlot& slot = slots_[id.index];
     const std::uint32_t moved =
         slot.set == BodySet::Moving ? moving.swapRemove(slot.dense) : statics.swapRemove(slot.dense);

@@ -91,6 +91,8 @@ public:
     const BodySlot* find(BodyId id) const;
     std::uint32_t count() const { return moving.size() + statics.size(); }
     const std::vector<BodySlot>& slots() const { return slots_; }
+    /// Counts the bodies added and removed: while it stays the same, every dense index names the same body.
+    std::uint64_t layoutChanges() const { return layoutChanges_; }
     /// Debug aid (RUBBLE_VALIDATE): every live slot points at a row that points back, every array has the
     /// set's length. Returns a description of the first broken invariant, or an empty string.
     std::string checkInvariants() const;
@@ -98,6 +100,7 @@ public:
 private:
     std::vector<BodySlot> slots_;
     std::vector<std::uint32_t> freeSlots_;
+    std::uint64_t layoutChanges_ = 0;
 };
 
 }  // namespace rubble::detail

@@ -30,7 +30,9 @@ ManifoldReuse::Finder::Found ManifoldReuse::Finder::find(std::uint64_t order) {
     return {};
 }
 
-void ManifoldReuse::begin(std::size_t chunkCount) {
+void ManifoldReuse::begin(std::size_t chunkCount, std::uint64_t layoutChanges) {
+    sameBodies_ = havePrevious_ && layoutChanges == previousLayout_;
+    currentLayout_ = layoutChanges;
     if (current_.size() < chunkCount) current_.resize(chunkCount);
     for (std::size_t c = 0; c < chunkCount; ++c) {
         current_[c].entries.clear();
@@ -41,6 +43,8 @@ void ManifoldReuse::begin(std::size_t chunkCount) {
 
 void ManifoldReuse::finish() {
     std::swap(previous_, current_);
+    previousLayout_ = currentLayout_;
+    havePrevious_ = true;
     // Chunks past this step's count hold older entries: they must not be found.
     for (std::size_t c = currentCount_; c < previous_.size(); ++c) {
         previous_[c].entries.clear();
@@ -55,6 +59,7 @@ void ManifoldReuse::finish() {
 }
 
 void ManifoldReuse::clear() {
+    havePrevious_ = sameBodies_ = false;
     previous_.clear();
     current_.clear();
     previousLast_.clear();

@@ -121,9 +121,13 @@ public:
         bool started_ = false;
     };
 
-    /// Starts a step whose candidates fill `chunkCount` chunks: this step's caches are emptied.
-    void begin(std::size_t chunkCount);
+    /// Starts a step whose candidates fill `chunkCount` chunks: this step's caches are emptied. `layoutChanges`:
+    /// BodyStorage::layoutChanges now.
+    void begin(std::size_t chunkCount, std::uint64_t layoutChanges);
     ChunkCache& current(std::size_t chunk) { return current_[chunk]; }
+    /// Whether last step's entries were made with the bodies at the same dense indices as now: an entry found by
+    /// its order then names the same bodies, and their slots and generations need not be compared.
+    bool sameBodies() const { return sameBodies_; }
     /// Ends the step: this step's entries become the ones the next step finds.
     void finish();
     /// Forgets everything (reuse switched off).
@@ -132,6 +136,8 @@ public:
 private:
     std::vector<ChunkCache> previous_, current_;
     std::size_t currentCount_ = 0;
+    std::uint64_t previousLayout_ = 0, currentLayout_ = 0;
+    bool havePrevious_ = false, sameBodies_ = false;
     /// Per chunk of previous_: the largest order in it or any chunk before it (0 if none), for the binary search.
     std::vector<std::uint64_t> previousLast_;
 };

@@ -673,7 +673,7 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
     if (chunks_.size() < chunkCount) chunks_.resize(chunkCount);
     const bool reuse = params.reuseDistance > 0;
     if (reuse)
-        reuse_.begin(chunkCount);
+        reuse_.begin(chunkCount, storage.layoutChanges());
     else
         reuse_.clear();
 
@@ -692,16 +692,22 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             const StaticBodies& st = storage.statics;
             const std::uint32_t shape1 = m.shape[first], shape2 = secondStatic ? st.shape[second] : m.shape[second];
             if (!worthReusing(tables_.kind[shape1], tables_.kind[shape2])) return false;
-            const std::uint32_t slot1 = m.slot[first], slot2 = secondStatic ? st.slot[second] : m.slot[second];
-            const auto& slots = storage.slots();
             // Written in place (a whole Entry built on the stack and copied in stalls on store forwarding).
             const auto entryIndex = static_cast<std::uint32_t>(cache->entries.size());
             ManifoldReuse::Entry& now = cache->entries.emplace_back();
-            now.order =
-                ManifoldReuse::orderOf(section, first, section == ManifoldReuse::Section::Moving ? second : slot2);
-            now.slots = (std::uint64_t{slot1} << 32) | slot2;
-            now.generations = (std::uint64_t{slots[slot1].generation} << 32) | slots[slot2].generation;
+            now.order = ManifoldReuse::orderOf(section, first,
+                                               section == ManifoldReuse::Section::Moving ? second : st.slot[second]);
             now.shapeFirst = shape1, now.shapeSecond = shape2;
+            // The bodies' slots and generations (the slot map is read at random): compared only when bodies were
+            // added or removed since last step, else taken over with a reused entry.
+            const auto identify = [&] {
+                const std::uint32_t slot1 = m.slot[first], slot2 = secondStatic ? st.slot[second] : m.slot[second];
+                const auto& slots = storage.slots();
+                now.slots = (std::uint64_t{slot1} << 32) | slot2;
+                now.generations = (std::uint64_t{slots[slot1].generation} << 32) | slots[slot2].generation;
+            };
+            const bool sameBodies = reuse_.sameBodies();
+            if (!sameBodies) identify();
             const auto movingPose = [&](std::uint32_t i) {
                 const float* pose = rowOf(rows_.pose, i);
                 return BodyPose{{pose[kComX], pose[kComY], pose[kComZ]},
@@ -719,9 +725,8 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             now.margin = speculativeMargin<float>(params, motion1.v, motion1.w, motion1.reach, motion2.v, motion2.w,
                                                   motion2.reach);
             const ManifoldReuse::Finder::Found found = finder.find(now.order);
-            if (found.entry != nullptr && found.entry->slots == now.slots &&
-                found.entry->generations == now.generations && found.entry->shapeFirst == shape1 &&
-                found.entry->shapeSecond == shape2) {
+            if (found.entry != nullptr && found.entry->shapeFirst == shape1 && found.entry->shapeSecond == shape2 &&
+                (sameBodies || (found.entry->slots == now.slots && found.entry->generations == now.generations))) {
                 const ManifoldReuse::Entry& then = *found.entry;
                 const PoseChange change1 = poseChange(then.first, now.first);
                 const PoseChange change2 = poseChange(then.second, now.second);
@@ -764,6 +769,7 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
                     return true;
                 }
             }
+            if (sameBodies) identify();
             const auto jobsNow = static_cast<std::uint32_t>(chunk.jobs.size());
             chunk.pending.push_back({entryIndex, first, jobsNow, jobsNow});
             return false;
