@@ -1,10 +1,13 @@
-// How the contact solver splits the step's manifolds into the segments it solves apart: blocks of small islands, the
-// slabs of large islands and the manifolds that cross them (ContactSolver::partition and splitIntoSlabs). Kept apart
-// from contact_solver.cpp, whose kernels GCC inlines within a growth budget for the whole file: there, this code
-// cost S5's solver 3% at one thread.
+// How the contact solver splits the step's manifolds into the segments it solves apart (blocks of small islands, the
+// slabs of large islands and the manifolds that cross them: ContactSolver::partition and splitIntoSlabs), numbers
+// their bodies' rows and colours each segment (assignRows, colourSegments, layOutColours, fillLanes). Kept apart
+// from contact_solver.cpp, whose kernels GCC inlines within a growth budget for the whole file: there, the
+// partition alone cost S5's solver 3% at one thread.
 #include "solver/contact_solver.h"
 
 #include <algorithm>
+#include <atomic>
+#include <bit>
 #include <cmath>
 
 #include "islands.h"
@@ -40,6 +43,7 @@ void ContactSolver::partition(const Contacts& contacts, const Islands* islands, 
     segmentOfIsland_.clear();
     slabSegments_ = 0;
     const bool useIslands = islands && islands->count() > 0 && islands->manifolds.size() <= manifoldCount;
+    segmentsFromIslands_ = useIslands;
     if (!useIslands) {
         segmentManifolds_.resize(manifoldCount);
         for (std::size_t k = 0; k < manifoldCount; ++k) segmentManifolds_[k] = static_cast<std::uint32_t>(k);
@@ -112,6 +116,8 @@ void ContactSolver::splitIntoSlabs(const Contacts& contacts, const MovingBodies&
         appendLarge(largePart_.data(), largePart_.size());
         return;
     }
+    slabAxis_ = axis;
+    slabCut_ = cut;
     // A manifold stays in a slab when all its dynamic bodies lie on that side of the cut; else it crosses.
     // Written without branches: which side of the cut a manifold lies is a coin toss to the branch predictor.
     const auto slabOf = [&](std::uint32_t dense) { return coordinate[dense] < cut ? 0u : 1u; };
@@ -134,6 +140,201 @@ void ContactSolver::splitIntoSlabs(const Contacts& contacts, const MovingBodies&
     }
     for (std::size_t part = 0; part <= kSlabCount; ++part) appendLarge(lists[part], counts[part]);
     slabSegments_ = kSlabCount;
+}
+
+void ContactSolver::assignRows(const Contacts& contacts, const Islands* islands, const MovingBodies& m, bool anyHeld) {
+    solverIndex_.assign(m.size(), -1);
+    bodies_.moving.clear();
+    // The sides the solve touches, in segment order: dynamic bodies, and the moving bodies it holds still.
+    const auto touchSides = [&](bool dynamic, bool held) {
+        const std::uint8_t dynamicBits = dynamic ? kTraitDynamicA | kTraitDynamicB : 0;
+        const std::uint8_t heldBits = held ? kTraitHeldA | kTraitHeldB : 0;
+        for (const std::uint32_t k : segmentManifolds_) {
+            const std::uint8_t traits = traits_[k];
+            if ((traits & kTraitLeftOut) != 0) continue;
+            const ContactPair& p = contacts.pairs[k];
+            if ((traits & (kTraitDynamicA | kTraitHeldA) & (dynamicBits | heldBits)) != 0) touchRow(p.a);
+            if ((traits & (kTraitDynamicB | kTraitHeldB) & (dynamicBits | heldBits)) != 0) touchRow(p.b);
+        }
+    };
+    if (!segmentsFromIslands_) {
+        touchSides(true, true);  // in order of first appearance
+        return;
+    }
+    // Every dynamic body lies in one island, and the islands' bodies are listed: a block's bodies take rows island by
+    // island, the large islands' bodies slab by slab, each in ascending index order. Every segment's dynamic bodies
+    // then lie in rows of its own (a block's neighbouring ones), numbered without reading a manifold, and the
+    // segments can be coloured apart (colourSegments). The bodies the solve holds still come after, in order of
+    // first appearance.
+    const auto islandManifolds = [&](std::uint32_t k) {
+        return islands->manifoldStart[k + 1] - islands->manifoldStart[k];
+    };
+    const auto touchIsland = [&](std::uint32_t k, int slab) {
+        const float* coordinate = slabAxis_ == 0 ? m.px.data() : (slabAxis_ == 1 ? m.py.data() : m.pz.data());
+        for (std::uint32_t i = islands->bodyStart[k]; i < islands->bodyStart[k + 1]; ++i) {
+            const std::uint32_t body = islands->bodies[i];
+            if (!isDynamicBody(m, body)) continue;
+            if (slab >= 0 && (coordinate[body] < slabCut_ ? 0 : 1) != slab) continue;
+            touchRow(body);
+        }
+    };
+    const std::uint32_t islandCount = islands->count();
+    for (std::uint32_t k = 0; k < islandCount; ++k)
+        if (segmentOfIsland_[k] != kLargeSegment) touchIsland(k, -1);
+    for (int slab = slabSegments_ > 0 ? 0 : -1; slab < static_cast<int>(slabSegments_); ++slab)
+        for (std::uint32_t k = 0; k < islandCount; ++k)
+            if (segmentOfIsland_[k] == kLargeSegment && islandManifolds(k) > kLargeIslandManifolds)
+                touchIsland(k, slab);
+    if (anyHeld) touchSides(false, true);
+}
+
+bool ContactSolver::colourSegment(const Contacts& contacts, std::size_t segment) {
+    SegmentColours& out = segmentColours_[segment];
+    std::fill(std::begin(out.manifolds), std::end(out.manifolds), 0u);
+    for (auto& counts : out.byPoints) std::fill(std::begin(counts), std::end(counts), 0u);
+    std::uint32_t constraints = 0;
+    bool rowsFound = true;
+    for (std::uint32_t at = segmentStart_[segment]; at < segmentStart_[segment + 1]; ++at) {
+        const std::uint32_t k = segmentManifolds_[at];
+        const std::uint8_t traits = traits_[k];
+        if ((traits & kTraitLeftOut) != 0) {
+            segmentColor_[at] = kNoColor;
+            continue;
+        }
+        const ContactPair& p = contacts.pairs[k];
+        const bool dynA = (traits & kTraitDynamicA) != 0, dynB = (traits & kTraitDynamicB) != 0;
+        const std::int32_t ia = dynA ? solverIndex_[p.a] : 0, ib = dynB ? solverIndex_[p.b] : 0;
+        if (ia < 0 || ib < 0) {  // a dynamic body the islands did not list (see colourSegments)
+            rowsFound = false;
+            segmentColor_[at] = kNoColor;
+            continue;
+        }
+        std::uint64_t used = 0;
+        if (dynA) used |= bodyColors_[static_cast<std::size_t>(ia)];
+        if (dynB) used |= bodyColors_[static_cast<std::size_t>(ib)];
+        std::uint32_t color = static_cast<std::uint32_t>(std::countr_one(used));
+        if (color >= kMaxColors) {
+            color = kOverflowColor;
+        } else {
+            if (dynA) bodyColors_[static_cast<std::size_t>(ia)] |= std::uint64_t{1} << color;
+            if (dynB) bodyColors_[static_cast<std::size_t>(ib)] |= std::uint64_t{1} << color;
+        }
+        segmentColor_[at] = static_cast<std::uint8_t>(color);
+        out.manifolds[color] += 1;
+        out.byPoints[color][traits & kTraitPoints] += 1;
+        constraints += 1;
+    }
+    out.constraints = constraints;
+    return rowsFound;
+}
+
+void ContactSolver::colourSegments(const Contacts& contacts, const MovingBodies& m, TaskPool& pool) {
+    const std::size_t segmentCount = segmentStart_.size() - 1;
+    segmentColours_.resize(segmentCount);
+    segmentColor_.resize(segmentManifolds_.size());
+    // The blocks and slabs share no dynamic body, and each has rows of its own: they are coloured at once, each by
+    // one task. The manifolds that cross the slabs share bodies with both: they are coloured after them, afresh.
+    const std::size_t apart = slabSegments_ > 0 ? segmentCount - 1 : segmentCount;
+    const auto colourAll = [&](TaskPool* parallel) {
+        bodyColors_.assign(bodies_.moving.size(), 0);
+        std::atomic<bool> rowsFound{true};
+        const auto colour = [&](std::size_t, std::size_t begin, std::size_t end, int) {
+            for (std::size_t segment = begin; segment < end; ++segment)
+                if (!colourSegment(contacts, segment)) rowsFound.store(false, std::memory_order_relaxed);
+        };
+        if (parallel)
+            parallel->forChunks(apart, 1, colour);
+        else
+            colour(0, 0, apart, 0);
+        if (apart < segmentCount) {
+            const std::size_t crossing = segmentCount - 1;
+            for (std::uint32_t at = segmentStart_[crossing]; at < segmentStart_[crossing + 1]; ++at) {
+                const ContactPair& p = contacts.pairs[segmentManifolds_[at]];
+                if (!p.aStatic && solverIndex_[p.a] >= 0) bodyColors_[static_cast<std::size_t>(solverIndex_[p.a])] = 0;
+                if (!p.bStatic && solverIndex_[p.b] >= 0) bodyColors_[static_cast<std::size_t>(solverIndex_[p.b])] = 0;
+            }
+            if (!colourSegment(contacts, crossing)) rowsFound = false;
+        }
+        return rowsFound.load();
+    };
+    if (colourAll(&pool)) return;
+    // Islands built over other manifolds than these left a dynamic body without a row, and perhaps in two segments:
+    // every manifold in one segment instead, its bodies in order of first appearance.
+    partition(contacts, nullptr, m);
+    assignRows(contacts, nullptr, m, false);
+    colourAll(nullptr);
+}
+
+std::uint32_t ContactSolver::layOutColours() {
+    colors_.clear();
+    blocks_.clear();
+    slabs_.clear();
+    stats_ = {};
+    const std::size_t segmentCount = segmentStart_.size() - 1;
+    blockOfSegment_.assign(segmentCount, kLargeSegment);
+    const std::size_t firstSlab = segmentCount - 1 - slabSegments_;
+    std::uint32_t batchCount = 0;
+    for (std::size_t segment = 0; segment < segmentCount; ++segment) {
+        const bool largePart = segment + 1 == segmentCount;
+        const bool slab = segment >= firstSlab && !largePart;
+        SegmentColours& sc = segmentColours_[segment];
+        // Every colour starts a fresh batch; the overflow colour comes last.
+        const auto firstColor = static_cast<std::uint32_t>(colors_.size());
+        for (std::uint32_t c = 0; c <= kMaxColors; ++c) {
+            sc.firstBatch[c] = batchCount;
+            if (sc.manifolds[c] == 0) continue;
+            const auto n = static_cast<std::uint32_t>((sc.manifolds[c] + kBatchLanes - 1) / kBatchLanes);
+            colors_.push_back({batchCount, n, c == kOverflowColor});
+            batchCount += n;
+        }
+        const ColorSpan span{firstColor, static_cast<std::uint32_t>(colors_.size()) - firstColor};
+        if (largePart) {
+            large_ = span;
+        } else if (slab) {
+            if (span.colorCount > 0) slabs_.push_back(span);
+        } else if (span.colorCount > 0) {
+            blockOfSegment_[segment] = static_cast<std::uint32_t>(blocks_.size());
+            blocks_.push_back(span);
+        }
+        stats_.constraints += sc.constraints;
+        stats_.colors = std::max(stats_.colors, span.colorCount);
+        if (largePart || slab) stats_.largeIslandConstraints += sc.constraints;
+    }
+    manifoldOfLane_.assign(std::size_t{batchCount} * kBatchLanes, ~0u);
+    batchPoints_.assign(batchCount, 0);
+    return batchCount;
+}
+
+void ContactSolver::fillLanes(TaskPool& pool) {
+    pool.forChunks(segmentStart_.size() - 1, 1, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t segment = begin; segment < end; ++segment) {
+            const SegmentColours& sc = segmentColours_[segment];
+            // Per colour, manifolds by point count: a colour's lanes are filled with the manifolds of most points
+            // first, so that batches of few-point manifolds stop early. Lanes of one colour share no dynamic body,
+            // so their order within the colour does not change the result. The overflow colour is solved lane by
+            // lane over shared bodies, so it keeps manifold order. `filled`: the next free lane per colour and
+            // point count, counted from the colour's first lane.
+            std::uint32_t filled[kMaxColors + 1][kMaxManifoldPoints + 1];
+            for (std::uint32_t c = 0; c <= kMaxColors; ++c) {
+                std::uint32_t at = 0;
+                for (int points = kMaxManifoldPoints; points >= 0; --points) {
+                    filled[c][points] = at;
+                    if (c != kOverflowColor) at += sc.byPoints[c][points];
+                }
+            }
+            for (std::uint32_t at = segmentStart_[segment]; at < segmentStart_[segment + 1]; ++at) {
+                const std::uint8_t c = segmentColor_[at];
+                if (c == kNoColor) continue;
+                const std::uint32_t k = segmentManifolds_[at];
+                const int points = traits_[k] & kTraitPoints;
+                const std::size_t slot =
+                    std::size_t{sc.firstBatch[c]} * kBatchLanes + filled[c][c == kOverflowColor ? 0 : points]++;
+                manifoldOfLane_[slot] = k;
+                std::uint8_t& most = batchPoints_[slot / kBatchLanes];
+                most = std::max(most, static_cast<std::uint8_t>(points));
+            }
+        }
+    });
 }
 
 }  // namespace rubble::detail

@@ -17,11 +17,6 @@ constexpr std::size_t kManifoldChunk = 1024;
 /// Batches per task inside a colour: small enough that two threads share a colour of a few thousand manifolds,
 /// large enough that a task outweighs its dispatch.
 constexpr std::size_t kBatchChunk = 8;
-/// Colours beyond this go to one overflow set solved lane by lane on one thread (bodies with more than 63
-/// neighbours of their own colour are rare: a heap of debris around one big body).
-constexpr std::uint32_t kMaxColors = 63;
-constexpr std::uint32_t kOverflowColor = kMaxColors;
-constexpr std::uint32_t kNoColor = ~0u;
 /// Shock propagation: passes over each level's contacts.
 constexpr int kShockPasses = 4;
 
@@ -137,33 +132,10 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
     const StaticBodies& s = storage.statics;
     const std::size_t manifoldCount = contacts.manifolds.size();
 
+    // What partitioning and colouring read of each manifold, one byte each (see traits_).
     traits_.resize(manifoldCount);
-    pool.forChunks(manifoldCount, kManifoldChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-        for (std::size_t k = begin; k < end; ++k) {
-            const ContactPair& p = contacts.pairs[k];
-            traits_[k] = static_cast<std::uint8_t>(contacts.manifolds[k].pointCount |
-                                                   (!p.aStatic && isDynamicBody(m, p.a) ? kTraitDynamicA : 0) |
-                                                   (!p.bStatic && isDynamicBody(m, p.b) ? kTraitDynamicB : 0));
-        }
-    });
-    partition(contacts, islands, m);
-
-    // Solver indices in order of first appearance, segment by segment (a block's bodies get neighbouring rows), and
-    // greedy colouring in each segment's manifold order: serial, linear, and dependent only on the manifolds'
-    // canonical order and the islands.
-    solverIndex_.assign(m.size(), -1);
-    bodies_.moving.clear();
-    bodyColors_.clear();
-    colorOf_.resize(manifoldCount);
-    const auto isDynamic = [&](std::uint32_t dense) { return isDynamicBody(m, dense); };
-    const auto touch = [&](std::uint32_t dense) {
-        if (solverIndex_[dense] < 0) {
-            solverIndex_[dense] = static_cast<std::int32_t>(bodies_.moving.size());
-            bodies_.moving.push_back(dense);
-            bodyColors_.push_back(0);
-        }
-        return static_cast<std::uint32_t>(solverIndex_[dense]);
-    };
+    const std::size_t traitChunks = TaskPool::chunkCount(manifoldCount, kManifoldChunk);
+    chunkHeld_.assign(traitChunks, 0);
     const bool jointFilter = joints && !joints->noContactPairs.empty();
     const auto jointed = [&](const ContactPair& p) {
         const std::uint32_t slotA = p.aStatic ? s.slot[p.a] : m.slot[p.a];
@@ -171,106 +143,30 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
         return std::binary_search(joints->noContactPairs.begin(), joints->noContactPairs.end(),
                                   jointedPairKey(slotA, slotB));
     };
-    colors_.clear();
-    blocks_.clear();
-    manifoldOfLane_.clear();
-    batchPoints_.clear();
-    stats_ = {};
-    std::uint32_t batchCount = 0;
-    const std::size_t segmentCount = segmentStart_.size() - 1;
-    blockOfSegment_.assign(segmentCount, kLargeSegment);
-    slabs_.clear();
-    const std::size_t firstSlab = segmentCount - 1 - slabSegments_;
-    for (std::size_t segment = 0; segment < segmentCount; ++segment) {
-        const bool largePart = segment + 1 == segmentCount;
-        const bool slab = segment >= firstSlab && !largePart;
-        const std::uint32_t* first = segmentManifolds_.data() + segmentStart_[segment];
-        const std::uint32_t* last = segmentManifolds_.data() + segmentStart_[segment + 1];
-        // Slabs and the manifolds that cross them share bodies but are solved apart: each colours afresh.
-        if (largePart && slabSegments_ > 0)
-            for (const std::uint32_t* it = first; it != last; ++it) {
-                const ContactPair& p = contacts.pairs[*it];
-                if (!p.aStatic && solverIndex_[p.a] >= 0) bodyColors_[static_cast<std::size_t>(solverIndex_[p.a])] = 0;
-                if (!p.bStatic && solverIndex_[p.b] >= 0) bodyColors_[static_cast<std::size_t>(solverIndex_[p.b])] = 0;
-            }
-        std::uint32_t colorCounts[kMaxColors + 1] = {};
-        // Per colour, manifolds by point count: a colour's lanes are filled with the manifolds of most points first,
-        // so that batches of few-point manifolds stop early. Lanes of one colour share no dynamic body, so their
-        // order within the colour does not change the result.
-        std::uint32_t pointCounts[kMaxColors + 1][kMaxManifoldPoints + 1] = {};
-        std::uint32_t constraints = 0;
-        for (const std::uint32_t* it = first; it != last; ++it) {
-            const std::uint32_t k = *it;
+    pool.forChunks(manifoldCount, kManifoldChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
+        bool held = false;
+        for (std::size_t k = begin; k < end; ++k) {
             const ContactPair& p = contacts.pairs[k];
-            const std::uint8_t traits = traits_[k];
-            const bool dynA = (traits & kTraitDynamicA) != 0, dynB = (traits & kTraitDynamicB) != 0;
-            if ((!dynA && !dynB) || (jointFilter && jointed(p))) {
-                colorOf_[k] = kNoColor;
-                continue;
-            }
-            std::uint64_t used = 0;
-            std::uint32_t ia = 0, ib = 0;
-            if (!p.aStatic) ia = touch(p.a);
-            if (!p.bStatic) ib = touch(p.b);
-            if (dynA) used |= bodyColors_[ia];
-            if (dynB) used |= bodyColors_[ib];
-            std::uint32_t color = static_cast<std::uint32_t>(std::countr_one(used));
-            if (color >= kMaxColors) {
-                color = kOverflowColor;
-            } else {
-                if (dynA) bodyColors_[ia] |= std::uint64_t{1} << color;
-                if (dynB) bodyColors_[ib] |= std::uint64_t{1} << color;
-            }
-            colorOf_[k] = color;
-            colorCounts[color] += 1;
-            pointCounts[color][traits & kTraitPoints] += 1;
-            constraints += 1;
+            const bool movingA = !p.aStatic, movingB = !p.bStatic;
+            const bool dynamicA = movingA && isDynamicBody(m, p.a), dynamicB = movingB && isDynamicBody(m, p.b);
+            const bool leftOut = (!dynamicA && !dynamicB) || (jointFilter && jointed(p));
+            const bool heldA = movingA && !dynamicA, heldB = movingB && !dynamicB;
+            traits_[k] = static_cast<std::uint8_t>(contacts.manifolds[k].pointCount | (dynamicA ? kTraitDynamicA : 0) |
+                                                   (dynamicB ? kTraitDynamicB : 0) | (heldA ? kTraitHeldA : 0) |
+                                                   (heldB ? kTraitHeldB : 0) | (leftOut ? kTraitLeftOut : 0));
+            held = held || (!leftOut && (heldA || heldB));
         }
-        // Every colour starts a fresh batch; the overflow colour comes last.
-        const auto firstColor = static_cast<std::uint32_t>(colors_.size());
-        std::uint32_t colorFirstBatch[kMaxColors + 1] = {};
-        for (std::uint32_t c = 0; c <= kMaxColors; ++c) {
-            if (colorCounts[c] == 0) continue;
-            const std::uint32_t n = static_cast<std::uint32_t>((colorCounts[c] + kBatchLanes - 1) / kBatchLanes);
-            colorFirstBatch[c] = batchCount;
-            colors_.push_back({batchCount, n, c == kOverflowColor});
-            batchCount += n;
-        }
-        const ColorSpan span{firstColor, static_cast<std::uint32_t>(colors_.size()) - firstColor};
-        if (largePart) {
-            large_ = span;
-        } else if (slab) {
-            if (span.colorCount > 0) slabs_.push_back(span);
-        } else if (span.colorCount > 0) {
-            blockOfSegment_[segment] = static_cast<std::uint32_t>(blocks_.size());
-            blocks_.push_back(span);
-        }
-        stats_.constraints += constraints;
-        stats_.colors = std::max(stats_.colors, span.colorCount);
-        if (largePart || slab) stats_.largeIslandConstraints += constraints;
-        manifoldOfLane_.resize(std::size_t{batchCount} * kBatchLanes, ~0u);
-        batchPoints_.resize(batchCount, 0);
-        // Next free lane per colour and point count, counted from the colour's first lane. The overflow colour is
-        // solved lane by lane over shared bodies, so it keeps manifold order.
-        std::uint32_t filled[kMaxColors + 1][kMaxManifoldPoints + 1];
-        for (std::uint32_t c = 0; c <= kMaxColors; ++c) {
-            std::uint32_t at = 0;
-            for (int points = kMaxManifoldPoints; points >= 0; --points) {
-                filled[c][points] = at;
-                if (c != kOverflowColor) at += pointCounts[c][points];
-            }
-        }
-        for (const std::uint32_t* it = first; it != last; ++it) {
-            const std::uint32_t c = colorOf_[*it];
-            if (c == kNoColor) continue;
-            const int points = traits_[*it] & kTraitPoints;
-            const std::size_t slot =
-                std::size_t{colorFirstBatch[c]} * kBatchLanes + filled[c][c == kOverflowColor ? 0 : points]++;
-            manifoldOfLane_[slot] = *it;
-            std::uint8_t& most = batchPoints_[slot / kBatchLanes];
-            most = std::max(most, static_cast<std::uint8_t>(points));
-        }
-    }
+        chunkHeld_[c] = held;
+    });
+    const bool anyHeld = std::find(chunkHeld_.begin(), chunkHeld_.end(), 1) != chunkHeld_.end();
+
+    // Segments, body rows, then greedy colouring in each segment's manifold order (the segments in parallel) and the
+    // colours' lanes: dependent only on the manifolds' canonical order, the islands and the bodies' places.
+    partition(contacts, islands, m);
+    assignRows(contacts, islands, m, anyHeld);
+    colourSegments(contacts, m, pool);
+    const std::uint32_t batchCount = layOutColours();
+    fillLanes(pool);
     // Islands in a block that kept no constraint are solved with the large islands (their joints, say).
     for (std::uint32_t& segment : segmentOfIsland_)
         segment = segment == kLargeSegment || blockOfSegment_[segment] == kLargeSegment
@@ -278,7 +174,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
                       : blockOfSegment_[segment];
     // Jointed bodies after the contacts' own, in the joints' order.
     if (joints)
-        for (std::uint32_t dense : joints->bodies) touch(dense);
+        for (std::uint32_t dense : joints->bodies) touchRow(dense);
     const std::uint32_t bodyCount = static_cast<std::uint32_t>(bodies_.moving.size());
     bodies_.count = bodyCount;
     stats_.batches = batchCount;
@@ -315,7 +211,7 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
             q0x_[i] = m.qx[d], q0y_[i] = m.qy[d], q0z_[i] = m.qz[d], q0w_[i] = m.qw[d];
             bodies_.velocity[i] = bodies_.motion[i] = bodies_.pseudo[i] = BodyRow{};
             MassRow row{};
-            if (isDynamic(d)) {
+            if (isDynamicBody(m, d)) {
                 row.inverseMass = m.invMass[d];
                 if (rotation_)
                     row = {{m.iwXX[d], m.iwYY[d], m.iwZZ[d], m.iwXY[d], m.iwXZ[d], m.iwYZ[d]}, m.invMass[d], 0.0f};

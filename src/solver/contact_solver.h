@@ -39,8 +39,16 @@ struct Islands;
 inline bool isDynamicBody(const MovingBodies& m, std::uint32_t dense) {
     return (m.flags[dense] & (kFlagKinematic | kFlagFrozen | kFlagAsleep)) == 0 && m.invMass[dense] > 0;
 }
-/// Bits of ContactSolver's per-manifold traits: the point count, and which sides are dynamic bodies.
-inline constexpr std::uint8_t kTraitPoints = 0x7, kTraitDynamicA = 0x8, kTraitDynamicB = 0x10;
+/// Bits of ContactSolver's per-manifold traits: the point count; which sides are dynamic bodies, and which are
+/// moving bodies the solver holds still (kinematic, frozen, asleep or of infinite mass); whether the manifold is
+/// left out of the solve (no dynamic body, or a pair of jointed bodies that do not collide).
+inline constexpr std::uint8_t kTraitPoints = 0x7, kTraitDynamicA = 0x8, kTraitDynamicB = 0x10, kTraitHeldA = 0x20,
+                              kTraitHeldB = 0x40, kTraitLeftOut = 0x80;
+/// Colours beyond this go to one overflow set solved lane by lane on one thread (bodies with more than 63
+/// neighbours of their own colour are rare: a heap of debris around one big body).
+inline constexpr std::uint32_t kMaxColors = 63;
+inline constexpr std::uint32_t kOverflowColor = kMaxColors;
+inline constexpr std::uint8_t kNoColor = 0xFF;
 /// Before colouring, segmentOfIsland_ names segments; this one is the large islands'.
 inline constexpr std::uint32_t kLargeSegment = ~0u;
 
@@ -185,6 +193,25 @@ private:
     void partition(const Contacts& contacts, const Islands* islands, const MovingBodies& m);
     /// Appends largePart_ as slabs (when large enough) and the manifolds that cross them (see the .cpp).
     void splitIntoSlabs(const Contacts& contacts, const MovingBodies& m);
+    /// Gives a body row (solver index) to every body the constraints touch, segment by segment (see the .cpp).
+    void assignRows(const Contacts& contacts, const Islands* islands, const MovingBodies& m, bool anyHeld);
+    /// The body's row, given one if it has none yet.
+    std::uint32_t touchRow(std::uint32_t dense) {
+        if (solverIndex_[dense] < 0) {
+            solverIndex_[dense] = static_cast<std::int32_t>(bodies_.moving.size());
+            bodies_.moving.push_back(dense);
+        }
+        return static_cast<std::uint32_t>(solverIndex_[dense]);
+    }
+    /// Greedy colouring of every segment in its manifold order, into segmentColor_ and segmentColours_.
+    void colourSegments(const Contacts& contacts, const MovingBodies& m, TaskPool& pool);
+    /// False if a dynamic body of the segment has no row.
+    bool colourSegment(const Contacts& contacts, std::size_t segment);
+    /// The colours' batch ranges (colors_), the blocks', slabs' and large islands' spans and the stats, from the
+    /// segments' colour counts; returns the number of batches.
+    std::uint32_t layOutColours();
+    /// Each segment's manifolds into their colours' lanes (manifoldOfLane_, batchPoints_), the segments in parallel.
+    void fillLanes(TaskPool& pool);
     BodyRows rowsFor(int worker);
     /// Builds the constraint rows of batches [begin, end) from the inputs prepare() kept.
     void buildBatches(std::uint32_t begin, std::uint32_t end);
@@ -258,7 +285,20 @@ private:
     std::vector<std::uint32_t> blockOfSegment_;    ///< prepare scratch: a segment's block, if it kept constraints
     std::vector<std::int32_t> solverIndex_;        ///< dense index of a moving body -> solver index, -1 if untouched
     std::vector<std::uint64_t> bodyColors_;        ///< per solver index: colours that already hold the body
-    std::vector<std::uint32_t> colorOf_;
+    /// What colouring found in one segment: per colour, its manifolds and how many of them have each point count;
+    /// where the colour's batches start (layOutColours).
+    struct SegmentColours {
+        std::uint32_t manifolds[kMaxColors + 1];
+        std::uint32_t byPoints[kMaxColors + 1][kMaxManifoldPoints + 1];
+        std::uint32_t firstBatch[kMaxColors + 1];
+        std::uint32_t constraints;
+    };
+    std::vector<SegmentColours> segmentColours_;
+    std::vector<std::uint8_t> segmentColor_;  ///< per entry of segmentManifolds_: its colour, or kNoColor
+    std::vector<std::uint8_t> chunkHeld_;     ///< prepare scratch: a chunk of manifolds touches a held body
+    bool segmentsFromIslands_ = false;        ///< partition() placed the manifolds by their islands
+    int slabAxis_ = 0;                        ///< the slabs' cut: along this axis...
+    float slabCut_ = 0;                       ///< ...a body below this lies in slab 0, else in slab 1
     /// Per manifold, what partitioning and colouring read of it (see ManifoldTraits in the .cpp), gathered in
     /// parallel so that the serial passes read one byte, not a manifold's cache line and two bodies' flags.
     std::vector<std::uint8_t> traits_;
