@@ -145,6 +145,9 @@ void ContactSolver::splitIntoSlabs(const Contacts& contacts, const MovingBodies&
 void ContactSolver::assignRows(const Contacts& contacts, const Islands* islands, const MovingBodies& m, bool anyHeld) {
     solverIndex_.assign(m.size(), -1);
     bodies_.moving.clear();
+    const std::size_t segmentCount = segmentStart_.size() - 1;
+    segmentRows_.assign(segmentCount, {});
+    const auto rowCount = [&] { return static_cast<std::uint32_t>(bodies_.moving.size()); };
     // The sides the solve touches, in segment order: dynamic bodies, and the moving bodies it holds still.
     const auto touchSides = [&](bool dynamic, bool held) {
         const std::uint8_t dynamicBits = dynamic ? kTraitDynamicA | kTraitDynamicB : 0;
@@ -159,6 +162,7 @@ void ContactSolver::assignRows(const Contacts& contacts, const Islands* islands,
     };
     if (!segmentsFromIslands_) {
         touchSides(true, true);  // in order of first appearance
+        for (RowRange& range : segmentRows_) range = {0, rowCount()};
         return;
     }
     // Every dynamic body lies in one island, and the islands' bodies are listed: a block's bodies take rows island by
@@ -178,13 +182,26 @@ void ContactSolver::assignRows(const Contacts& contacts, const Islands* islands,
             touchRow(body);
         }
     };
+    // Blocks are runs of consecutive islands, so each block's rows come out in one range.
     const std::uint32_t islandCount = islands->count();
-    for (std::uint32_t k = 0; k < islandCount; ++k)
-        if (segmentOfIsland_[k] != kLargeSegment) touchIsland(k, -1);
-    for (int slab = slabSegments_ > 0 ? 0 : -1; slab < static_cast<int>(slabSegments_); ++slab)
+    for (std::uint32_t k = 0; k < islandCount; ++k) {
+        const std::uint32_t segment = segmentOfIsland_[k];
+        if (segment == kLargeSegment) continue;
+        if (segmentRows_[segment].end == 0) segmentRows_[segment].begin = rowCount();
+        touchIsland(k, -1);
+        segmentRows_[segment].end = rowCount();
+    }
+    const std::size_t firstLarge = segmentCount - 1 - slabSegments_;
+    const std::uint32_t largeBegin = rowCount();
+    for (int slab = slabSegments_ > 0 ? 0 : -1; slab < static_cast<int>(slabSegments_); ++slab) {
+        const std::uint32_t slabBegin = rowCount();
         for (std::uint32_t k = 0; k < islandCount; ++k)
             if (segmentOfIsland_[k] == kLargeSegment && islandManifolds(k) > kLargeIslandManifolds)
                 touchIsland(k, slab);
+        if (slab >= 0) segmentRows_[firstLarge + static_cast<std::size_t>(slab)] = {slabBegin, rowCount()};
+    }
+    // The large part's manifolds (those that cross the slabs, when there are slabs) may touch any of its rows.
+    segmentRows_[segmentCount - 1] = {largeBegin, rowCount()};
     if (anyHeld) touchSides(false, true);
 }
 
@@ -194,6 +211,10 @@ bool ContactSolver::colourSegment(const Contacts& contacts, std::size_t segment)
     for (auto& counts : out.byPoints) std::fill(std::begin(counts), std::end(counts), 0u);
     std::uint32_t constraints = 0;
     bool rowsFound = true;
+    const RowRange rows = segmentRows_[segment];
+    const auto outside = [&](std::int32_t row) {
+        return static_cast<std::uint32_t>(row) < rows.begin || static_cast<std::uint32_t>(row) >= rows.end;
+    };
     for (std::uint32_t at = segmentStart_[segment]; at < segmentStart_[segment + 1]; ++at) {
         const std::uint32_t k = segmentManifolds_[at];
         const std::uint8_t traits = traits_[k];
@@ -204,7 +225,7 @@ bool ContactSolver::colourSegment(const Contacts& contacts, std::size_t segment)
         const ContactPair& p = contacts.pairs[k];
         const bool dynA = (traits & kTraitDynamicA) != 0, dynB = (traits & kTraitDynamicB) != 0;
         const std::int32_t ia = dynA ? solverIndex_[p.a] : 0, ib = dynB ? solverIndex_[p.b] : 0;
-        if (ia < 0 || ib < 0) {  // a dynamic body the islands did not list (see colourSegments)
+        if ((dynA && outside(ia)) || (dynB && outside(ib))) {  // the islands did not list it here (colourSegments)
             rowsFound = false;
             segmentColor_[at] = kNoColor;
             continue;
@@ -258,8 +279,9 @@ void ContactSolver::colourSegments(const Contacts& contacts, const MovingBodies&
         return rowsFound.load();
     };
     if (colourAll(&pool)) return;
-    // Islands built over other manifolds than these left a dynamic body without a row, and perhaps in two segments:
-    // every manifold in one segment instead, its bodies in order of first appearance.
+    // Islands built over other manifolds than these left a dynamic body without a row, or with a row in another
+    // segment than one of its manifolds (two tasks would then solve it at once): every manifold in one segment
+    // instead, its bodies in order of first appearance.
     partition(contacts, nullptr, m);
     assignRows(contacts, nullptr, m, false);
     colourAll(nullptr);

@@ -205,7 +205,7 @@ private:
     }
     /// Greedy colouring of every segment in its manifold order, into segmentColor_ and segmentColours_.
     void colourSegments(const Contacts& contacts, const MovingBodies& m, TaskPool& pool);
-    /// False if a dynamic body of the segment has no row.
+    /// False if a dynamic body of the segment has no row in the segment's range.
     bool colourSegment(const Contacts& contacts, std::size_t segment);
     /// The colours' batch ranges (colors_), the blocks', slabs' and large islands' spans and the stats, from the
     /// segments' colour counts; returns the number of batches.
@@ -294,6 +294,11 @@ private:
         std::uint32_t constraints;
     };
     std::vector<SegmentColours> segmentColours_;
+    /// Per segment: the rows its dynamic bodies must lie in (assignRows), checked as it is coloured.
+    struct RowRange {
+        std::uint32_t begin = 0, end = 0;
+    };
+    std::vector<RowRange> segmentRows_;
     std::vector<std::uint8_t> segmentColor_;  ///< per entry of segmentManifolds_: its colour, or kNoColor
     std::vector<std::uint8_t> chunkHeld_;     ///< prepare scratch: a chunk of manifolds touches a held body
     bool segmentsFromIslands_ = false;        ///< partition() placed the manifolds by their islands
