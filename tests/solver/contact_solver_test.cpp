@@ -185,15 +185,30 @@ std::size_t compareVelocities(const detail::ContactSolver& x, const detail::Cont
     return compared;
 }
 
+/// Expects two solves of the same contacts to have stored the same impulses, bit for bit, and to have left every
+/// moving body's velocity the same; returns how many bodies had rows.
+std::size_t compareSolves(detail::ContactSolver& x, detail::ContactSolver& y, World::Impl& w) {
+    std::vector<detail::PointImpulse> xImpulses(w.impulses.size()), yImpulses(w.impulses.size());
+    x.storeImpulses(xImpulses, *w.pool);
+    y.storeImpulses(yImpulses, *w.pool);
+    EXPECT_EQ(std::memcmp(xImpulses.data(), yImpulses.data(), xImpulses.size() * sizeof(detail::PointImpulse)), 0);
+    return compareVelocities(x, y, w.bodies.moving.size());
+}
+
+/// Two threads and no sleeping, as the solver tests that compare one solve with another run.
+WorldSettings twoThreadsAwake() {
+    WorldSettings s;
+    s.threads = 2;
+    s.effects = s.effects.without(Effect::Sleeping);
+    return s;
+}
+
 // Islands share no body, and greedy colouring in manifold order gives each manifold the same colour whether its
 // island is coloured alone or with every other: so blocks of small islands, each running all its iterations in one
 // task (its warm start included), must end bit for bit where one colouring of everything, iteration by iteration,
 // ends.
 TEST(ContactSolver, IslandBlocksEndWhereOneColouringEnds) {
-    WorldSettings s;
-    s.threads = 2;
-    s.effects = s.effects.without(Effect::Sleeping);
-    World world(s);
+    World world(twoThreadsAwake());
     // One island too large for a block (1,785 manifolds), too small to be cut in slabs (their order of solving is
     // their own: LargeIslandsAreCutIntoSlabsThatShareNoBody).
     buildPyramid(world, 9);
@@ -262,13 +277,7 @@ TEST(ContactSolver, IslandBlocksEndWhereOneColouringEnds) {
     together.warmStart(*w.pool);
     blocked.solveVelocities(true, *w.pool, 8, /*warmStartFirst=*/true);
     for (int i = 0; i < 8; ++i) together.solveVelocities(true, *w.pool);
-    std::vector<detail::PointImpulse> blockedImpulses(w.impulses.size()), togetherImpulses(w.impulses.size());
-    blocked.storeImpulses(blockedImpulses, *w.pool);
-    together.storeImpulses(togetherImpulses, *w.pool);
-    ASSERT_EQ(std::memcmp(blockedImpulses.data(), togetherImpulses.data(),
-                          blockedImpulses.size() * sizeof(detail::PointImpulse)),
-              0);
-    EXPECT_GT(compareVelocities(blocked, together, w.bodies.moving.size()), 600u);
+    EXPECT_GT(compareSolves(blocked, together, w), 600u);
     // Only now look at the blocks' rows: the solve above built them in the blocks' own tasks.
     for (std::size_t k = 0; k < blocked.blocks().size(); ++k) claim(blocked.blocks()[k], static_cast<int>(k));
     claim(blocked.largeIslands(), -2);
@@ -290,10 +299,7 @@ TEST(ContactSolver, IslandBlocksEndWhereOneColouringEnds) {
 TEST(ContactSolver, IslandsThatMissAManifoldFallBackToOneColouring) {
     for (const bool stacked : {false, true}) {
         SCOPED_TRACE(stacked ? "a box on the last one" : "the last box alone");
-        WorldSettings s;
-        s.threads = 2;
-        s.effects = s.effects.without(Effect::Sleeping);
-        World world(s);
+        World world(twoThreadsAwake());
         buildPyramid(world, 5);
         BodyDef box;
         box.shape = world.createShape(BoxDef{{0.4f, 0.4f, 0.4f}});
@@ -342,13 +348,7 @@ TEST(ContactSolver, IslandsThatMissAManifoldFallBackToOneColouring) {
             fallback.solveVelocities(true, *w.pool);
             together.solveVelocities(true, *w.pool);
         }
-        std::vector<detail::PointImpulse> fallbackImpulses(w.impulses.size()), togetherImpulses(w.impulses.size());
-        fallback.storeImpulses(fallbackImpulses, *w.pool);
-        together.storeImpulses(togetherImpulses, *w.pool);
-        ASSERT_EQ(std::memcmp(fallbackImpulses.data(), togetherImpulses.data(),
-                              fallbackImpulses.size() * sizeof(detail::PointImpulse)),
-                  0);
-        EXPECT_GT(compareVelocities(fallback, together, w.bodies.moving.size()), 90u);
+        EXPECT_GT(compareSolves(fallback, together, w), 90u);
     }
 }
 
@@ -356,10 +356,7 @@ TEST(ContactSolver, IslandsThatMissAManifoldFallBackToOneColouring) {
 // islands' joints (a hanging chain with no contact) run before theirs. Per island that is the order of one serial
 // joint pass over the store followed by one colouring of everything, so the two must end bit for bit alike.
 TEST(ContactSolver, JointsInBlocksEndWhereTheSerialJointPassEnds) {
-    WorldSettings s;
-    s.threads = 2;
-    s.effects = s.effects.without(Effect::Sleeping);
-    World world(s);
+    World world(twoThreadsAwake());
     BodyDef ground;
     ground.type = BodyType::Static;
     ground.shape = world.createShape(BoxDef{{60, 0.5f, 60}});
@@ -495,10 +492,7 @@ TEST(ContactSolver, WideKernelsAgreeWithScalarKernelsBitForBit) {
 // body is in both slabs, every manifold crossing the cut has one dynamic body on each side, and every constraint is
 // in exactly one of them.
 TEST(ContactSolver, LargeIslandsAreCutIntoSlabsThatShareNoBody) {
-    WorldSettings s;
-    s.threads = 2;
-    s.effects = s.effects.without(Effect::Sleeping);
-    World world(s);
+    World world(twoThreadsAwake());
     buildPyramid(world, 12);  // 4,324 manifolds in one island
     world.step(1.0f / 60.0f);
     World::Impl& w = detail::WorldAccess::of(world);
