@@ -78,12 +78,13 @@ struct Posed {
     const Shape* shape;
 };
 
-// Always inlined, as posedSide: returned through memory, the pose is written in pieces and read back whole, which
-// stalls on store forwarding in the per-pair loop.
+/// Body i's row in MovingRows::pose or ::motion.
 [[gnu::always_inline]] inline const float* rowOf(const AlignedVector<float>& rows, std::uint32_t i) {
     return rows.data() + std::size_t{i} * simd::kRowFloats;
 }
 
+// Always inlined, as posedSide: returned through memory, the pose is written in pieces and read back whole, which
+// stalls on store forwarding in the per-pair loop.
 [[gnu::always_inline]] inline Posed posed(const BodyStorage& storage, const MovingRows& rows,
                                           const std::vector<Shape>& shapes, std::uint32_t i, bool isStatic) {
     if (isStatic) {
@@ -161,8 +162,8 @@ struct MeshSide {
     }
 };
 
-/// Centre of a sphere side. A whole moving sphere's centre is its centre of mass, so only the position rows are
-/// read: the common case (S4) then touches 3 arrays per side instead of every pose array.
+/// Centre of a sphere side. A whole moving sphere's centre is its centre of mass, so only its pose row is read, not
+/// the motion row that posed() needs for the local centre of mass.
 Vec3 sphereCenter(const BodyStorage& storage, const MovingRows& rows, const std::vector<Shape>& shapes,
                   const ContactPair& p, bool sideB) {
     const std::uint32_t i = sideB ? p.b : p.a;
