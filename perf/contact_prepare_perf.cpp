@@ -12,6 +12,7 @@
 #include "rubble/scene.h"
 #include "rubble/world.h"
 #include "solver/contact_solver.h"
+#include "thread_counts.h"
 #include "world_access.h"
 #include "world_impl.h"
 
@@ -44,15 +45,5 @@ void prepareContacts(benchmark::State& state, const char* file, int steps) {
 
 }  // namespace
 
-BENCHMARK_CAPTURE(prepareContacts, S2_step60, "s2_pyramids.json", 60)
-    ->Arg(1)
-    ->Arg(2)
-    ->ArgName("threads")
-    ->Unit(benchmark::kMicrosecond)
-    ->UseRealTime();
-BENCHMARK_CAPTURE(prepareContacts, S3_step300, "s3_mesh_pile.json", 300)
-    ->Arg(1)
-    ->Arg(2)
-    ->ArgName("threads")
-    ->Unit(benchmark::kMicrosecond)
-    ->UseRealTime();
+BENCHMARK_CAPTURE(prepareContacts, S2_step60, "s2_pyramids.json", 60)->Apply(atOneAndTwoThreads);
+BENCHMARK_CAPTURE(prepareContacts, S3_step300, "s3_mesh_pile.json", 300)->Apply(atOneAndTwoThreads);

@@ -21,6 +21,7 @@
 #include "rubble/scene.h"
 #include "rubble/world.h"
 #include "shapes/shape.h"
+#include "thread_counts.h"
 
 namespace {
 
@@ -119,39 +120,9 @@ void runStage(benchmark::State& state, const char* file, int steps, bool reuse) 
 
 }  // namespace
 
-BENCHMARK_CAPTURE(runStage, S1_pyramid_start, "s1_pyramid.json", 0, false)
-    ->Arg(1)
-    ->Arg(2)
-    ->ArgName("threads")
-    ->Unit(benchmark::kMicrosecond)
-    ->UseRealTime();
-BENCHMARK_CAPTURE(runStage, S1_pyramid_step60, "s1_pyramid.json", 60, false)
-    ->Arg(1)
-    ->Arg(2)
-    ->ArgName("threads")
-    ->Unit(benchmark::kMicrosecond)
-    ->UseRealTime();
-BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step60, "s3_mesh_pile.json", 60, false)
-    ->Arg(1)
-    ->Arg(2)
-    ->ArgName("threads")
-    ->Unit(benchmark::kMicrosecond)
-    ->UseRealTime();
-BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step90, "s3_mesh_pile.json", 90, false)
-    ->Arg(1)
-    ->Arg(2)
-    ->ArgName("threads")
-    ->Unit(benchmark::kMicrosecond)
-    ->UseRealTime();
-BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step300, "s3_mesh_pile.json", 300, false)
-    ->Arg(1)
-    ->Arg(2)
-    ->ArgName("threads")
-    ->Unit(benchmark::kMicrosecond)
-    ->UseRealTime();
-BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step300_reused, "s3_mesh_pile.json", 300, true)
-    ->Arg(1)
-    ->Arg(2)
-    ->ArgName("threads")
-    ->Unit(benchmark::kMicrosecond)
-    ->UseRealTime();
+BENCHMARK_CAPTURE(runStage, S1_pyramid_start, "s1_pyramid.json", 0, false)->Apply(atOneAndTwoThreads);
+BENCHMARK_CAPTURE(runStage, S1_pyramid_step60, "s1_pyramid.json", 60, false)->Apply(atOneAndTwoThreads);
+BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step60, "s3_mesh_pile.json", 60, false)->Apply(atOneAndTwoThreads);
+BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step90, "s3_mesh_pile.json", 90, false)->Apply(atOneAndTwoThreads);
+BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step300, "s3_mesh_pile.json", 300, false)->Apply(atOneAndTwoThreads);
+BENCHMARK_CAPTURE(runStage, S3_mesh_pile_step300_reused, "s3_mesh_pile.json", 300, true)->Apply(atOneAndTwoThreads);

@@ -148,20 +148,21 @@ void ContactSolver::assignRows(const Contacts& contacts, const Islands* islands,
     const std::size_t segmentCount = segmentStart_.size() - 1;
     segmentRows_.assign(segmentCount, {});
     const auto rowCount = [&] { return static_cast<std::uint32_t>(bodies_.moving.size()); };
-    // The sides the solve touches, in segment order: dynamic bodies, and the moving bodies it holds still.
-    const auto touchSides = [&](bool dynamic, bool held) {
-        const std::uint8_t dynamicBits = dynamic ? kTraitDynamicA | kTraitDynamicB : 0;
-        const std::uint8_t heldBits = held ? kTraitHeldA | kTraitHeldB : 0;
+    // The moving sides the solve touches, in segment order: the sides it holds still, and the dynamic ones too
+    // unless the islands number those.
+    const auto touchSides = [&](bool dynamicToo) {
+        const std::uint8_t sideA = kTraitHeldA | (dynamicToo ? kTraitDynamicA : 0);
+        const std::uint8_t sideB = kTraitHeldB | (dynamicToo ? kTraitDynamicB : 0);
         for (const std::uint32_t k : segmentManifolds_) {
             const std::uint8_t traits = traits_[k];
             if ((traits & kTraitLeftOut) != 0) continue;
             const ContactPair& p = contacts.pairs[k];
-            if ((traits & (kTraitDynamicA | kTraitHeldA) & (dynamicBits | heldBits)) != 0) touchRow(p.a);
-            if ((traits & (kTraitDynamicB | kTraitHeldB) & (dynamicBits | heldBits)) != 0) touchRow(p.b);
+            if ((traits & sideA) != 0) touchRow(p.a);
+            if ((traits & sideB) != 0) touchRow(p.b);
         }
     };
     if (!segmentsFromIslands_) {
-        touchSides(true, true);  // in order of first appearance
+        touchSides(true);  // in order of first appearance
         for (RowRange& range : segmentRows_) range = {0, rowCount()};
         return;
     }
@@ -202,7 +203,7 @@ void ContactSolver::assignRows(const Contacts& contacts, const Islands* islands,
     }
     // The large part's manifolds (those that cross the slabs, when there are slabs) may touch any of its rows.
     segmentRows_[segmentCount - 1] = {largeBegin, rowCount()};
-    if (anyHeld) touchSides(false, true);
+    if (anyHeld) touchSides(false);
 }
 
 bool ContactSolver::colourSegment(const Contacts& contacts, std::size_t segment) {
