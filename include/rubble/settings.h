@@ -65,7 +65,8 @@ struct SolverSettings {
     /// With warm starting: a contact new this step through which a body rests on something lower starts from the
     /// impulses that would hold that body still under gravity, with everything resting on it (computed top down,
     /// solver/resting_loads.h). Without it, a stack that appears at once gets its loads only as fast as the
-    /// iterations pass them down, one layer or so each, and its upper layers fall into the layers below.
+    /// iterations pass them down, one layer or so each, and its upper layers fall into the layers below. Bodies still
+    /// landing on their supports get no guess, and impulses that stopped an impact are not passed down as loads.
     bool seedRestingLoads = true;
     /// Approach speeds below this do not bounce, m/s: resting contacts would otherwise jitter.
     float restitutionThreshold = 1.0f;

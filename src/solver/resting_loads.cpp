@@ -22,15 +22,29 @@ constexpr std::uint32_t kNotResting = ~0u;
 constexpr float kMinSupportCosine = 0.25f;
 /// Rounds of the active set: points that came out pulling are dropped and the rest solved again.
 constexpr int kActiveSetRounds = 4;
+/// balance(): the regularisation as a share of the mean squared size of the columns, and the refinements that take
+/// its bias back from the directions the points span well (each leaves ~2% of the last one's error there).
+constexpr double kRegularisation = 1e-2;
+constexpr int kRefinements = 3;
+/// A body counts as resting on a support while it approaches it no faster than this many times what gravity adds
+/// in one substep: a body at rest gained g h before the solve, one landing from a few millimetres more. A landing
+/// body is stopped by the iterations; seeding it as if it were at rest is a guess without grounds, and the impulses
+/// that stopped it last step are no load to pass down.
+constexpr float kRestingApproachSteps = 2.0f;
+/// The supports' guess lifts a body by at most this many times the load along gravity, whatever the least-squares
+/// answer: a guess beyond the load is energy that the iterations would have to take back.
+constexpr float kMaxLift = 1.5f;
 /// Manifolds per task of the scan for supports.
 constexpr std::size_t kManifoldChunk = 2048;
 
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 
-/// Least-norm point forces f >= 0 with sum f_i column_i = wanted (force, torque). Tikhonov-regularised, so that a
-/// body whose supports cannot balance it exactly (a sloped contact, a single point off the centre) gets the
-/// least-squares answer; the regularisation is relative, so units and sizes do not matter.
+/// Point forces f >= 0 with sum f_i column_i = wanted (force, torque), least-norm among the exact answers.
+/// Regularised (Tikhonov, relative to the columns' mean size, then refined twice), so that what the points can
+/// balance is balanced to float precision while what they can hardly balance (a sideways load on supports whose
+/// normals differ by a hair) is left unbalanced instead of being bought with huge opposing forces: the answer is at
+/// most a few times the load, however the points lie. The iterations balance what is left.
 template <class SupportPoint>
 void balance(std::vector<SupportPoint>& points, const Vec6& wanted) {
     const auto columnOf = [](const SupportPoint& p) {
@@ -40,10 +54,19 @@ void balance(std::vector<SupportPoint>& points, const Vec6& wanted) {
     };
     for (int round = 0; round < kActiveSetRounds; ++round) {
         Mat6 normal = Mat6::Zero();
+        int active = 0;
         for (const SupportPoint& p : points)
-            if (p.active) normal += columnOf(p) * columnOf(p).transpose();
-        normal.diagonal().array() += 1e-9 * normal.trace() + 1e-30;
-        const Vec6 y = normal.ldlt().solve(wanted);
+            if (p.active) normal += columnOf(p) * columnOf(p).transpose(), ++active;
+        if (active == 0) return;
+        normal.diagonal().array() += kRegularisation * normal.trace() / active + 1e-30;
+        const Eigen::LDLT<Mat6> solver = normal.ldlt();
+        Vec6 y = solver.solve(wanted);
+        for (int refine = 0; refine < kRefinements; ++refine) {
+            Vec6 residual = wanted;
+            for (const SupportPoint& p : points)
+                if (p.active) residual -= columnOf(p) * columnOf(p).dot(y);
+            y += solver.solve(residual);
+        }
         bool dropped = false;
         for (SupportPoint& p : points) {
             p.force = p.active ? static_cast<float>(columnOf(p).dot(y)) : 0.0f;
@@ -91,6 +114,26 @@ std::uint32_t RestingLoads::seed(const Contacts& contacts, std::span<const std::
         return true;
     };
     const auto isCarried = [&](std::size_t m) { return m < carried.size() && carried[m] != 0; };
+    const auto velocityAt = [&](std::uint32_t body, bool isStatic, Vec3 point) {
+        if (isStatic) return Vec3{0, 0, 0};
+        const Vec3 arm = point - Vec3{bodies.px[body], bodies.py[body], bodies.pz[body]};
+        return Vec3{bodies.vx[body], bodies.vy[body], bodies.vz[body]} +
+               cross(Vec3{bodies.wx[body], bodies.wy[body], bodies.wz[body]}, arm);
+    };
+    // Whether the upper body of a support moves toward the lower one no faster than a body at rest would.
+    const float restingApproach = kRestingApproachSteps * g * params.h;
+    const auto atRest = [&](const Support& s) {
+        const ContactPair& p = contacts.pairs[s.manifold];
+        const Manifold& manifold = contacts.manifolds[s.manifold];
+        const Vec3 push = s.upperIsB ? manifold.normal : manifold.normal * -1.0f;
+        for (int i = 0; i < manifold.pointCount; ++i) {
+            const Vec3 at = manifold.points[i].position;
+            const Vec3 relative = s.upperIsB ? velocityAt(p.b, p.bStatic, at) - velocityAt(p.a, p.aStatic, at)
+                                             : velocityAt(p.a, p.aStatic, at) - velocityAt(p.b, p.bStatic, at);
+            if (!(dot(relative, push) >= -restingApproach)) return false;
+        }
+        return true;
+    };
     // The first manifold from m on that carried nothing. Most manifolds carry their impulses: memchr jumps to the
     // next one that does not.
     const std::size_t carriedCount = std::min(carried.size(), manifoldCount);
@@ -105,7 +148,7 @@ std::uint32_t RestingLoads::seed(const Contacts& contacts, std::span<const std::
     resting_.clear();
     for (std::size_t m = nextNew(0); m < manifoldCount; m = nextNew(m + 1)) {
         Support s;
-        if (!supportOf(m, s)) continue;
+        if (!supportOf(m, s) || !atRest(s)) continue;
         if (restingOf_[s.upper] == kNotResting) {
             restingOf_[s.upper] = 0;
             resting_.push_back(s.upper);
@@ -160,21 +203,30 @@ std::uint32_t RestingLoads::seed(const Contacts& contacts, std::span<const std::
     for (std::size_t k = 0; k < resting_.size(); ++k) {
         const std::uint32_t body = resting_[k];
         const Vec3 centre{bodies.px[body], bodies.py[body], bodies.pz[body]};
-        // What the supports must balance: the weight, and the loads of what rests on this body (impulses already
-        // carried or written, since everything above came first).
+        // What the new supports must balance: the weight, the loads of what rests on this body (impulses carried or
+        // written, since everything above came first), less what the supports it kept from last step carry.
         Vec3 force = params.gravity * (bodies.gravityScale[body] / bodies.invMass[body]);
         Vec3 torque{0, 0, 0};
         points.clear();
+        bool landing = false;
         for (std::uint32_t l = linkStart_[k]; l < linkStart_[k + 1]; ++l) {
             const Support& s = supports_[links_[l].support];
             const Manifold& manifold = contacts.manifolds[s.manifold];
+            const bool kept = isCarried(s.manifold);
+            // A body that approaches a support faster than one at rest is landing: it gets no guess. A contact
+            // above that is not at rest carries an impact, which is no load to pass down.
+            if (!links_[l].above && !atRest(s)) {
+                landing = true;
+                break;
+            }
+            if (links_[l].above && kept && !atRest(s)) continue;
             // Direction in which the support pushes the upper body.
             const Vec3 push = s.upperIsB ? manifold.normal : manifold.normal * -1.0f;
             for (int i = 0; i < manifold.pointCount; ++i) {
                 const Vec3 arm = manifold.points[i].position - centre;
-                if (links_[l].above) {
-                    const Vec3 load =
-                        push * (-impulses[std::size_t{s.manifold} * kMaxManifoldPoints + i].normal * invH);
+                const float impulse = impulses[std::size_t{s.manifold} * kMaxManifoldPoints + i].normal;
+                if (links_[l].above || kept) {
+                    const Vec3 load = push * ((links_[l].above ? -impulse : impulse) * invH);
                     force = force + load;
                     torque = torque + cross(arm, load);
                 } else if (manifold.points[i].depth >= -params.touchDistance) {
@@ -183,23 +235,27 @@ std::uint32_t RestingLoads::seed(const Contacts& contacts, std::span<const std::
                 }
             }
         }
+        if (landing) continue;
         Vec6 wanted;
         wanted << -force.x, -force.y, -force.z, -torque.x, -torque.y, -torque.z;
         balance(points, wanted);
+        const float load = std::max(0.0f, -dot(force, up));
+        float lift = 0;
+        for (const SupportPoint& p : points)
+            lift += p.force * (p.column[0] * up.x + p.column[1] * up.y + p.column[2] * up.z);
+        const float scale = lift > kMaxLift * load ? kMaxLift * load / lift : 1.0f;
         std::size_t next = 0;
         for (std::uint32_t l = linkStart_[k]; l < linkStart_[k + 1]; ++l) {
-            if (links_[l].above) continue;
             const Support& s = supports_[links_[l].support];
+            if (links_[l].above || isCarried(s.manifold)) continue;
             const Manifold& manifold = contacts.manifolds[s.manifold];
-            const bool write = !isCarried(s.manifold);
-            written += write;
+            ++written;
             for (int i = 0; i < manifold.pointCount; ++i) {
                 if (manifold.points[i].depth < -params.touchDistance) continue;
-                const float f = points[next++].force;
+                const float f = points[next++].force * scale;
                 // A guess that is not finite (a degenerate manifold) is no guess: the point starts from zero.
-                if (write)
-                    impulses[std::size_t{s.manifold} * kMaxManifoldPoints + i].normal =
-                        std::isfinite(f) ? f * params.h : 0.0f;
+                impulses[std::size_t{s.manifold} * kMaxManifoldPoints + i].normal =
+                    std::isfinite(f) ? f * params.h : 0.0f;
             }
         }
     }

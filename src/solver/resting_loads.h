@@ -5,9 +5,11 @@
 // starts from nothing, and the iterations must then build the load of everything above it. In a stack that pass
 // takes about one iteration per layer it crosses, and the iterations cannot keep up with tall piles that appear at
 // once (a scene's first step, a wall of a hundred rows): the upper layers fall through their unloaded contacts.
-// Here each body with a new contact under it gets, top down, the contact forces that balance its weight and what
-// rests on it (force and torque), least-norm among its support points, pushing only. The iterations then correct
-// this guess; they can take any of it back, so a wrong guess costs iterations, not energy.
+// Here each body at rest with a new contact under it gets, top down, the contact forces that balance its weight and
+// what rests on it (force and torque), least-norm among its new support points, pushing only. The iterations then
+// correct this guess; they can take any of it back, so a wrong guess costs iterations. It must never cost energy: a
+// body still landing is left to the iterations (it is not at rest, and what stopped it is no load), and the guess is
+// bounded by the load it balances.
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -30,8 +32,9 @@ struct RestingLoadParams {
 class RestingLoads {
 public:
     /// Writes normal impulses for the touching points of every manifold that carried nothing from last step
-    /// (`carried[m] == 0`) and through which a dynamic body rests on something lower, along gravity. Other
-    /// manifolds keep their impulses and count as they are for the loads they pass down. A jump from one new manifold
+    /// (`carried[m] == 0`) and through which a dynamic body rests on something lower, along gravity, unless the body
+    /// is still landing (approaches a support faster than a body at rest would). Other manifolds keep their impulses
+    /// and count as they are for the loads they pass down and the loads they hold up. A jump from one new manifold
     /// to the next, a parallel scan of all manifolds for the supports of the bodies found, then only those bodies,
     /// top down, on one thread. Returns the number of manifolds it wrote.
     std::uint32_t seed(const Contacts& contacts, std::span<const std::uint8_t> carried, const MovingBodies& bodies,
