@@ -204,6 +204,19 @@ TEST(SceneLoader, SolverKnobsReachTheSettings) {
               {"s.json", "/settings/linear_slop"});
 }
 
+// The runner's --set: keys named replace the scene's, the others stay, and a bad value is refused as in a file.
+TEST(SceneLoader, SettingsOverridesReplaceOnlyTheKeysTheyName) {
+    Scene s = parseScene(R"({"settings": {"substeps": 2, "velocity_iterations": 12}})", "base.json");
+    overrideSettings(s, R"({"substeps": 4, "position_correction": "soft_step"})", "--set");
+    EXPECT_EQ(s.settings.substeps, 4);
+    EXPECT_EQ(s.settings.velocityIterations, 12);
+    EXPECT_EQ(s.settings.solver.positionCorrection, PositionCorrection::SoftStep);
+    expectAll(errorOf([&] { overrideSettings(s, R"({"substep": 4})", "--set substep=4"); }),
+              {"--set substep=4", "/substep", "did you mean 'substeps'"});
+    expectAll(errorOf([&] { overrideSettings(s, R"([4])", "--set x"); }), {"--set x", "must be an object"});
+    EXPECT_EQ(s.settings.substeps, 4);
+}
+
 TEST(SceneLoader, SmallValidFileFillsEveryField) {
     const Scene s = loadScene(kData + "good_small.json");
     EXPECT_EQ(s.name, "small");

@@ -22,7 +22,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: rubble run [SCENE] [--steps N] [--threads T] [--broadphase auto|sap|grid] [--profile] [--trace FILE]\n"
-    "                  [--hash] [--realtime SECONDS [--rate HZ]]\n"
+    "                  [--hash] [--realtime SECONDS [--rate HZ]] [--set KEY=VALUE]...\n"
     "\n"
     "  SCENE         scene file (JSON); default: the standard scene S1, scenes/s1_pyramid.json\n"
     "  --steps N     number of steps (default: the scene's own)\n"
@@ -34,7 +34,9 @@ constexpr const char* kUsage =
     "  --realtime S  run the scene for S seconds of wall time through the Runtime (physics on its own thread at a\n"
     "                fixed rate, this thread rendering at 60 Hz by interpolation) and print the physics rate, the\n"
     "                dropped steps and the profile sampled from the rendered frames\n"
-    "  --rate HZ     the Runtime's physics rate for --realtime (default 120)\n";
+    "  --rate HZ     the Runtime's physics rate for --realtime (default 120)\n"
+    "  --set K=V     override the scene's setting K (a key of the scene format's settings, docs/scene_format.md) with\n"
+    "                V, a JSON value or a bare name: --set substeps=4 --set position_correction=soft_step\n";
 
 struct Options {
     std::string scene;
@@ -46,6 +48,7 @@ struct Options {
     std::string trace;
     double realtime = 0;
     double rate = 120;
+    std::vector<std::string> settings;  ///< --set overrides, KEY=VALUE, in order
 };
 
 [[noreturn]] void usageError(const std::string& message) {
@@ -57,6 +60,35 @@ long parseCount(std::string_view flag, const char* text, long min, long max) {
     const std::optional<long> value = rubble::apps::parseWhole(text, min, max);
     if (!value) usageError(rubble::apps::wholeNumberError(flag, text, min, max));
     return *value;
+}
+
+/// KEY=VALUE as a JSON object {"KEY": VALUE}; VALUE is taken as JSON if it starts like a number, an array, an object
+/// or a string in quotes, or is true or false, and as a bare name (quoted here) otherwise.
+std::string settingObject(std::string_view text) {
+    const std::size_t eq = text.find('=');
+    if (eq == std::string_view::npos || eq == 0) usageError("--set takes KEY=VALUE, not '" + std::string(text) + "'");
+    const std::string_view key = text.substr(0, eq), value = text.substr(eq + 1);
+    const bool json = !value.empty() &&
+                      (value.front() == '"' || value.front() == '[' || value.front() == '{' || value.front() == '-' ||
+                       (value.front() >= '0' && value.front() <= '9') || value == "true" || value == "false");
+    std::string out;
+    const auto appendQuoted = [&out](std::string_view s) {
+        out.push_back('"');
+        for (const char c : s) {
+            if (c == '"' || c == '\\') out.push_back('\\');
+            out.push_back(c);
+        }
+        out.push_back('"');
+    };
+    out.push_back('{');
+    appendQuoted(key);
+    out.append(": ");
+    if (json)
+        out.append(value);
+    else
+        appendQuoted(value);
+    out.push_back('}');
+    return out;
 }
 
 std::string defaultScene() { return rubble::apps::defaultScene(RUBBLE_SCENES_DIR); }
@@ -94,6 +126,8 @@ Options parseOptions(int argc, char** argv) {
             o.realtime = static_cast<double>(parseCount(a, value(), 1, 3600));
         else if (a == "--rate")
             o.rate = static_cast<double>(parseCount(a, value(), 1, 100000));
+        else if (a == "--set")
+            o.settings.emplace_back(value());
         else if (a == "--help" || a == "-h") {
             std::fputs(kUsage, stdout);
             std::exit(0);
@@ -206,6 +240,8 @@ int runRealtime(const Options& options, rubble::World world) {
 
 int run(const Options& options) {
     rubble::Scene scene = rubble::loadScene(options.scene);
+    for (const std::string& setting : options.settings)
+        rubble::overrideSettings(scene, settingObject(setting), "--set " + setting);
     if (options.threads >= 0) scene.settings.threads = options.threads;
     if (options.broadPhase) scene.settings.broadPhase = *options.broadPhase;
     const long steps = options.steps >= 0 ? options.steps : scene.steps;
@@ -226,6 +262,12 @@ int run(const Options& options) {
     std::printf("bodies     %u (%zu dynamic)\n", world.bodyCount(), dynamicIds.size());
     std::printf("steps      %ld of %.6g s, %d substep(s), integrator %s\n", steps, scene.settings.timeStep,
                 scene.settings.substeps, std::string(rubble::integratorName(scene.settings.integrator)).c_str());
+    const rubble::SolverSettings& solver = scene.settings.solver;
+    std::printf("solver     %s, %d+%d iterations, warm starting %s, resting-load guess %s, shock propagation %s\n",
+                std::string(rubble::positionCorrectionName(solver.positionCorrection)).c_str(),
+                scene.settings.velocityIterations, scene.settings.positionIterations,
+                solver.warmStarting ? "on" : "off", solver.warmStarting && solver.seedRestingLoads ? "on" : "off",
+                solver.shockPropagation ? "on" : "off");
     std::printf("threads    %d%s, SIMD %s (%d float lanes)\n", scene.settings.threads,
                 scene.settings.threads == 0 ? " (all cores)" : "", build.instructionSet, build.floatLanes);
     std::printf("broad      %s (setting)\n", std::string(rubble::broadPhaseName(scene.settings.broadPhase)).c_str());

@@ -44,6 +44,10 @@ Scene loadScene(const std::string& path);
 /// Same, from text in memory; `sourceName` stands for the file in messages and for resolving relative paths.
 Scene parseScene(std::string_view text, const std::string& sourceName);
 
+/// Reads a settings object of the scene format (docs/scene_format.md, `settings`) over the scene's settings: keys it
+/// names replace the scene's, the others stay. Validated as in a scene file; messages name `sourceName` and the key.
+void overrideSettings(Scene& scene, std::string_view settingsJson, const std::string& sourceName);
+
 /// Creates the scene's shapes and bodies in `world`; returns the body handles in Scene::bodies order.
 std::vector<BodyId> instantiate(const Scene& scene, World& world);
 

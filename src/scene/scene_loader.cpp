@@ -1136,6 +1136,16 @@ Scene parseScene(std::string_view text, const std::string& sourceName) {
     return std::move(b.scene);
 }
 
+void overrideSettings(Scene& scene, std::string_view settingsJson, const std::string& sourceName) {
+    Builder b;
+    b.file = sourceName;
+    b.scene.settings = scene.settings;
+    const Json doc = parseJson(settingsJson, sourceName);
+    if (!doc.is_object()) throw Error(sourceName + ": settings must be an object, got " + describe(doc));
+    b.parseSettings(doc, b.root());
+    scene.settings = b.scene.settings;
+}
+
 Scene loadScene(const std::string& path) {
     std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
     if (!f) throw Error("cannot open " + path + ": " + std::strerror(errno));
