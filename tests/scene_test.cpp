@@ -204,6 +204,37 @@ TEST(SceneLoader, SolverKnobsReachTheSettings) {
               {"s.json", "/settings/linear_slop"});
 }
 
+// The figures of a scene, against motion worked by hand: a ball coasting at 2 m/s along x without gravity for 1 s,
+// between two static boxes at x = 0 (their positions span only x = 0, so the ball ends outside their box).
+TEST(SceneFigures, MeterMeasuresACoastingBall) {
+    const Scene scene = parseScene(R"({"settings": {"gravity": [0, 0, 0], "effects": []},
+        "shapes": {"box": {"type": "box", "half_extents": [1, 1, 1]}, "ball": {"type": "sphere", "radius": 0.5}},
+        "bodies": [{"shape": "box", "type": "static", "position": [0, -5, 0]},
+                   {"shape": "box", "type": "static", "position": [0, 10, 0]},
+                   {"shape": "ball", "position": [0, 3, 0], "velocity": [2, 0, 0]}],
+        "figures": ["max_displacement", "max_speed", "final_speed", "moved", "escaped", "late_apex"]})",
+                                   "coast.json");
+    World world(scene.settings);
+    const std::vector<BodyId> ids = instantiate(scene, world);
+    SceneFigureMeter meter(scene, world, ids);
+    for (int i = 0; i < 60; ++i) {
+        world.step(1.0f / 60.0f);
+        meter.record(world);
+    }
+    EXPECT_NEAR(meter.value(world, SceneFigure::MaxDisplacement), 2.0, 1e-5);
+    EXPECT_NEAR(meter.value(world, SceneFigure::MaxSpeed), 2.0, 1e-6);
+    EXPECT_NEAR(meter.value(world, SceneFigure::FinalSpeed), 2.0, 1e-6);
+    EXPECT_EQ(meter.value(world, SceneFigure::Moved), 1.0);
+    EXPECT_EQ(meter.value(world, SceneFigure::Escaped), 1.0);
+    EXPECT_NEAR(meter.value(world, SceneFigure::LateApex), 3.0, 1e-6);
+    EXPECT_TRUE(std::isnan(meter.value(world, SceneFigure::Tunnelled)));
+    const std::vector<SceneFigureMeter::Result> results = meter.results(world);
+    ASSERT_EQ(results.size(), 6u);
+    EXPECT_EQ(results[0].text, "largest displacement from start: 2.0000 m");
+    expectAll(errorOf([] { parseScene(R"({"figures": ["max_sped"]})", "f.json"); }),
+              {"f.json", "/figures/0", "did you mean 'max_speed'"});
+}
+
 // The runner's --set: keys named replace the scene's, the others stay, and a bad value is refused as in a file.
 TEST(SceneLoader, SettingsOverridesReplaceOnlyTheKeysTheyName) {
     Scene s = parseScene(R"({"settings": {"substeps": 2, "velocity_iterations": 12}})", "base.json");

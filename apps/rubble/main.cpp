@@ -249,17 +249,13 @@ int run(const Options& options) {
     rubble::World world(scene.settings);
     const std::vector<rubble::BodyId> ids = rubble::instantiate(scene, world);
 
-    std::vector<rubble::BodyId> dynamicIds;
-    std::vector<rubble::Vec3> starts;
-    for (rubble::BodyId id : ids) {
-        if (world.bodyType(id) != rubble::BodyType::Dynamic) continue;
-        dynamicIds.push_back(id);
-        starts.push_back(world.centerOfMass(id));
-    }
+    rubble::SceneFigureMeter figures(scene, world, ids);
+    const auto dynamicCount = static_cast<std::size_t>(std::count_if(
+        ids.begin(), ids.end(), [&](rubble::BodyId id) { return world.bodyType(id) == rubble::BodyType::Dynamic; }));
 
     const rubble::BuildInfo build = rubble::buildInfo();
     std::printf("scene      %s (%s)\n", scene.name.c_str(), options.scene.c_str());
-    std::printf("bodies     %u (%zu dynamic)\n", world.bodyCount(), dynamicIds.size());
+    std::printf("bodies     %u (%zu dynamic)\n", world.bodyCount(), dynamicCount);
     std::printf("steps      %ld of %.6g s, %d substep(s), integrator %s\n", steps, scene.settings.timeStep,
                 scene.settings.substeps, std::string(rubble::integratorName(scene.settings.integrator)).c_str());
     const rubble::SolverSettings& solver = scene.settings.solver;
@@ -283,6 +279,7 @@ int run(const Options& options) {
     std::uint32_t frozen = 0;
     for (long s = 0; s < steps; ++s) {
         world.step(scene.settings.timeStep);
+        figures.record(world);
         const rubble::Profile& p = world.lastProfile();
         stepMs.push_back(p.stepMs);
         for (int k = 0; k < rubble::kStageCount; ++k)
@@ -327,24 +324,8 @@ int run(const Options& options) {
     }
 
     std::printf("\n");
-    for (rubble::SceneFigure figure : scene.figures) {
-        if (figure == rubble::SceneFigure::MaxDisplacement) {
-            double largest = 0;
-            for (std::size_t i = 0; i < dynamicIds.size(); ++i) {
-                const rubble::Vec3 d = world.centerOfMass(dynamicIds[i]) - starts[i];
-                largest = std::max(largest, static_cast<double>(rubble::length(d)));
-            }
-            std::printf("figure     largest displacement from start: %.4f m\n", largest);
-        } else if (figure == rubble::SceneFigure::Tunnelled) {
-            std::size_t tunnelled = 0;
-            for (rubble::BodyId id : dynamicIds) {
-                const rubble::Vec3 c = world.centerOfMass(id);
-                float h = 0;
-                if (world.terrainHeightAt(c.x, c.z, h) && c.y < h - 0.5f) ++tunnelled;
-            }
-            std::printf("figure     bodies tunnelled through the terrain: %zu of %zu\n", tunnelled, dynamicIds.size());
-        }
-    }
+    for (const rubble::SceneFigureMeter::Result& figure : figures.results(world))
+        std::printf("figure     %s\n", figure.text.c_str());
     if (options.hash) std::printf("state hash %016llx\n", static_cast<unsigned long long>(world.stateHash()));
     if (!options.trace.empty()) {
         trace.write(options.trace);

@@ -21,11 +21,21 @@ struct SceneBody {
     BodyDef def;
 };
 
-/// Figures a scene reports at the end of a run (SCENES.md).
+/// Figures a scene reports at the end of a run (SCENES.md, and the hard cases' own).
 enum class SceneFigure : std::uint8_t {
-    MaxDisplacement,  ///< largest distance any dynamic body moved from its start, m
+    MaxDisplacement,  ///< largest distance any dynamic body's centre of mass moved from its start, m
     Tunnelled,        ///< dynamic bodies whose centre is more than 0.5 m below the terrain surface
+    MaxSpeed,         ///< largest speed any dynamic body reached after any step of the run, m/s
+    FinalSpeed,       ///< largest speed of any dynamic body after the last step, m/s (at rest: near 0)
+    Moved,            ///< dynamic bodies whose centre of mass ended more than 0.1 m from its start
+    /// Dynamic bodies whose centre of mass ended outside the box spanned by the static bodies' positions (for a
+    /// scene enclosed by static walls: those that got out)
+    Escaped,
+    LateApex,  ///< highest centre of mass of any dynamic body over the last 2 s of the run, m
 };
+inline constexpr int kSceneFigureCount = 7;
+/// The figure's name in scene files ("max_displacement", ...).
+std::string_view sceneFigureName(SceneFigure f);
 
 struct Scene {
     std::string name;
@@ -47,6 +57,33 @@ Scene parseScene(std::string_view text, const std::string& sourceName);
 /// Reads a settings object of the scene format (docs/scene_format.md, `settings`) over the scene's settings: keys it
 /// names replace the scene's, the others stay. Validated as in a scene file; messages name `sourceName` and the key.
 void overrideSettings(Scene& scene, std::string_view settingsJson, const std::string& sourceName);
+
+/// Measures the scene's figures over a run: the runner prints them, the stability tests bound them. Construct it
+/// once the scene is instantiated (it takes the starts), call record() after every step, read results() at the end.
+/// record() costs a pass over the dynamic bodies only when a figure needs one (MaxSpeed, LateApex).
+class SceneFigureMeter {
+public:
+    SceneFigureMeter(const Scene& scene, const World& world, const std::vector<BodyId>& bodies);
+    void record(const World& world);
+    struct Result {
+        SceneFigure figure;
+        double value;
+        std::string text;  ///< "largest displacement from start: 0.0123 m"
+    };
+    std::vector<Result> results(const World& world) const;
+    /// The value of one figure the scene declares (NaN when it declares none such).
+    double value(const World& world, SceneFigure figure) const;
+
+private:
+    std::vector<SceneFigure> figures_;
+    std::vector<BodyId> dynamic_;
+    std::vector<Vec3> starts_;
+    Vec3 staticMin_{0, 0, 0}, staticMax_{0, 0, 0};
+    bool anyStatic_ = false;
+    double maxSpeed_ = 0;
+    double time_ = 0;
+    std::vector<std::pair<double, double>> apexes_;  ///< (time, highest centre) per step of the last 2 s
+};
 
 /// Creates the scene's shapes and bodies in `world`; returns the body handles in Scene::bodies order.
 std::vector<BodyId> instantiate(const Scene& scene, World& world);

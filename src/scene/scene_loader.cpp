@@ -1094,16 +1094,13 @@ void Builder::parseGenerators(const Json& j, const Loc& at) {
 
 void Builder::parseFigures(const Json& j, const Loc& at) {
     const Json& arr = expectArray(j, at, "an array of figure names");
+    std::vector<std::string_view> names;
+    for (int f = 0; f < kSceneFigureCount; ++f) names.push_back(sceneFigureName(static_cast<SceneFigure>(f)));
     for (std::size_t i = 0; i < arr.size(); ++i) {
         const std::string& name = getString(arr[i], at / i);
-        SceneFigure f;
-        if (name == "max_displacement")
-            f = SceneFigure::MaxDisplacement;
-        else if (name == "tunnelled")
-            f = SceneFigure::Tunnelled;
-        else
-            (at / i).fail("unknown figure '" + printable(name) + "'" +
-                          suggestion(name, std::initializer_list<std::string_view>{"max_displacement", "tunnelled"}));
+        const auto known = std::find(names.begin(), names.end(), name);
+        if (known == names.end()) (at / i).fail("unknown figure '" + printable(name) + "'" + suggestion(name, names));
+        const auto f = static_cast<SceneFigure>(known - names.begin());
         if (std::find(scene.figures.begin(), scene.figures.end(), f) != scene.figures.end())
             (at / i).fail("figure '" + name + "' listed twice");
         scene.figures.push_back(f);

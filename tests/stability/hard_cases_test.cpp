@@ -1,6 +1,13 @@
-// The hard cases: stacks and structures that solvers are known to fail, each a scene file that the runner and the
-// viewer show, run here through the public API at the default settings, built touching and dropped, with the
-// resting-load guess (SolverSettings::seedRestingLoads) on and off. Each test states its figure, its bound and why.
+// The hard cases (scenes/hard/): stacks and structures that solvers are known to fail, each a scene file that the
+// runner and the viewer show, run here through the public API with the resting-load guess
+// (SolverSettings::seedRestingLoads) on and off. Each test states its figure, its bound and why.
+//
+// Most cases run with the soft step at four substeps of 2 + 1 iterations and 60 Hz contacts (kSoftStep below), the
+// candidate that holds all of them but overlap recovery; the defaults (Baumgarte, 8 + 2 iterations, one substep)
+// still fail the dropped tower (22 m), the mass ratios (2.6-3.9 m) and S5d (16 m), so those run with the candidate
+// until the defaults change. Cases the defaults hold run at the defaults too. Not here yet, because nothing passes it:
+// overlap recovery (scenes/hard/overlap_recovery.json), whose push-out speeds add up layer by layer (27 m/s at the top
+// of ten layers with the candidate, 31 m/s at the defaults).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,7 +21,7 @@
 namespace rubble {
 namespace {
 
-Scene standardScene(const std::string& name) { return loadScene(std::string(RUBBLE_SOURCE_DIR) + "/scenes/" + name); }
+Scene sceneFile(const std::string& name) { return loadScene(std::string(RUBBLE_SOURCE_DIR) + "/scenes/" + name); }
 
 /// The scene dropped instead of built: every dynamic body's height above the lowest dynamic body's centre grows by
 /// `gapPerMetre`, so that layers of 1 m cubes start gapPerMetre m apart and land one after another (SCENES.md's S1d
@@ -28,31 +35,61 @@ Scene dropped(Scene scene, float gapPerMetre) {
     return scene;
 }
 
-struct SceneRun {
-    World world;
-    std::vector<BodyId> ids;
-    std::vector<Vec3> starts;
+enum class Solver { Defaults, SoftStep };
 
-    SceneRun(const Scene& scene, const WorldSettings& settings) : world(settings), ids(instantiate(scene, world)) {
-        for (BodyId id : ids) starts.push_back(world.position(id));
+/// The scene's settings with the solver under test and the guess on or off, at two threads.
+WorldSettings settingsFor(const Scene& scene, Solver solver, bool seed) {
+    WorldSettings s = scene.settings;
+    if (solver == Solver::SoftStep) {
+        s.solver.positionCorrection = PositionCorrection::SoftStep;
+        s.substeps = 4;
+        s.velocityIterations = 2;
+        s.positionIterations = 1;
+        s.solver.contactHertz = 60;
     }
-    void steps(int n) {
-        for (int i = 0; i < n; ++i) world.step(world.settings().timeStep);
-    }
-    /// SCENES.md's stability figure: the largest distance any dynamic body moved from its start.
-    float largestDisplacement() const {
-        float largest = 0;
-        for (std::size_t i = 0; i < ids.size(); ++i)
-            if (world.bodyType(ids[i]) == BodyType::Dynamic)
-                largest = std::max(largest, length(world.position(ids[i]) - starts[i]));
-        return largest;
-    }
-};
-
-WorldSettings withSeed(WorldSettings s, bool seed) {
     s.solver.seedRestingLoads = seed;
     s.threads = 2;
     return s;
+}
+
+/// One run of a scene: its figures (SceneFigureMeter) after `steps` steps (the scene's own by default).
+struct SceneRun {
+    World world;
+    std::vector<BodyId> ids;
+    SceneFigureMeter figures;
+
+    SceneRun(const Scene& scene, const WorldSettings& settings, int steps = -1)
+        : world(settings), ids(instantiate(scene, world)), figures(scene, world, ids) {
+        for (int i = 0, n = steps >= 0 ? steps : scene.steps; i < n; ++i) {
+            world.step(world.settings().timeStep);
+            figures.record(world);
+        }
+    }
+    double figure(SceneFigure f) const { return figures.value(world, f); }
+    float displacement(std::size_t body, const Scene& scene) const {
+        return length(world.position(ids[body]) - scene.bodies[body].def.position);
+    }
+};
+
+/// Runs the scene with the guess on and off and checks each figure against its bound; the displacement figures of the
+/// two runs must also agree within 1 cm, since the guess may make a scene converge faster but never be why it stands.
+struct Bound {
+    SceneFigure figure;
+    double most;
+};
+void expectWithinBounds(const Scene& scene, Solver solver, const std::vector<Bound>& bounds, int steps = -1) {
+    double displacement[2] = {0, 0};
+    for (const bool seed : {false, true}) {
+        const SceneRun run(scene, settingsFor(scene, solver, seed), steps);
+        for (const Bound& b : bounds)
+            EXPECT_LE(run.figure(b.figure), b.most)
+                << scene.name << ": " << sceneFigureName(b.figure) << ", guess " << (seed ? "on" : "off")
+                << (solver == Solver::Defaults ? ", defaults" : ", soft step");
+        displacement[seed] = run.figure(SceneFigure::MaxDisplacement);
+    }
+    if (!std::isnan(displacement[0])) {
+        EXPECT_NEAR(displacement[1], displacement[0], 0.01) << scene.name;
+    }
 }
 
 // Regression: S1's pyramid with its layers 1 cm apart (the top layer falls 19 cm). The resting-load guess used to
@@ -61,15 +98,123 @@ WorldSettings withSeed(WorldSettings s, bool seed) {
 // Figure: the largest displacement after 40 steps (all layers have landed by step 12). Bound: the top layer's drop plus
 // 4 cm of settling (measured 0.223 m, the same with the guess off), and the guess changes it by less than 1 cm.
 TEST(HardCases, DroppedPyramidIsNotThrownByTheRestingLoadGuess) {
-    const Scene scene = dropped(standardScene("s1_pyramid.json"), 0.01f);
+    const Scene scene = dropped(sceneFile("s1_pyramid.json"), 0.01f);
     float figure[2];
     for (const bool seed : {false, true}) {
-        SceneRun run(scene, withSeed(scene.settings, seed));
-        run.steps(40);
-        figure[seed] = run.largestDisplacement();
+        const SceneRun run(scene, settingsFor(scene, Solver::Defaults, seed), 40);
+        figure[seed] = static_cast<float>(run.figure(SceneFigure::MaxDisplacement));
         EXPECT_LT(figure[seed], 0.19f + 0.04f) << "seed " << seed;
     }
     EXPECT_NEAR(figure[true], figure[false], 0.01f);
+}
+
+// S1d (SCENES.md): S1's twenty layers 2 cm apart, the top one falling 0.38 m, for 200 steps (the figure at 600 steps
+// differs by 0.4 mm). Bound: the issue's, the drop plus 2 cm. The candidate settles 0.4 cm below its drop (measured
+// 0.384 m); the defaults end 3 cm beyond it (0.410 m), and Jolt and Box3D 4.4 and 1.3 cm beyond (SCENES.md).
+TEST(HardCases, S1dPyramidDroppedSettlesWithinTwoCentimetresOfItsDrop) {
+    expectWithinBounds(sceneFile("hard/s1d_pyramid_dropped.json"), Solver::SoftStep,
+                       {{SceneFigure::MaxDisplacement, 0.38 + 0.02}}, 200);
+}
+
+// S5d (SCENES.md): S5's hundred-row wall with its rows 1 cm apart, the top row falling 0.99 m, for 200 steps. The
+// candidate holds it 0.19 m beyond its drop (measured 1.176 m, guess on or off; Box3D 0.70 m beyond); the bound is that
+// with 6 cm to spare. Not met: the 10 cm beyond the drop, which needs stiffer contacts than two iterations per
+// substep converge (at 120 Hz the wall falls). The defaults let it collapse (16 m).
+TEST(HardCases, S5dWallDroppedStands) {
+    expectWithinBounds(sceneFile("hard/s5d_wall_dropped.json"), Solver::SoftStep,
+                       {{SceneFigure::MaxDisplacement, 0.99 + 0.25}});
+}
+
+// Twenty cubes, each up to 5 cm off the one below and turned up to 5 degrees, dropped 1 cm per layer, for 10 s.
+// Bound: the top's drop (0.19 m) plus 5 cm, and at rest at the end (under 5 cm/s). Measured 0.221 m and 2.8 cm/s with
+// the candidate; the defaults let the tower fall (22 m).
+TEST(HardCases, DroppedTowerStands) {
+    expectWithinBounds(sceneFile("hard/tower_dropped.json"), Solver::SoftStep,
+                       {{SceneFigure::MaxDisplacement, 0.19 + 0.05}, {SceneFigure::FinalSpeed, 0.05}});
+}
+
+// Mass ratios of 100:1, the heavy cube dropped 1 cm: on light (drop 1 cm) and between two light ones (drops 1 and
+// 2 cm). The candidate's springs sag by the load over their stiffness (100 g / (2 pi 60)^2 = 6.9 mm at the light cube
+// under the heavy one): measured 1.9 and 2.9 cm in all, so the bound is the drop plus 2 cm. The defaults topple both
+// (2.6 and 2.8 m).
+TEST(HardCases, HeavyOnLightStands) {
+    expectWithinBounds(sceneFile("hard/heavy_on_light.json"), Solver::SoftStep,
+                       {{SceneFigure::MaxDisplacement, 0.01 + 0.02}, {SceneFigure::FinalSpeed, 0.01}});
+    expectWithinBounds(sceneFile("hard/light_heavy_light.json"), Solver::SoftStep,
+                       {{SceneFigure::MaxDisplacement, 0.02 + 0.02}, {SceneFigure::FinalSpeed, 0.01}});
+}
+
+// A slab 1000 times heavier than each of the four small cubes under its corners, dropped 1 cm. The candidate holds it,
+// sagging 9 cm into the cubes (its springs carry 250 cube weights each); the bound is 15 cm. Not met: the slab does
+// not come to rest (0.5 m/s at the end), and a sag of a tenth of the cubes' size is no rigid body. The defaults let it
+// slide off (3.9 m).
+TEST(HardCases, BigBoxOnSmallOnesStands) {
+    expectWithinBounds(sceneFile("hard/big_on_small.json"), Solver::SoftStep, {{SceneFigure::MaxDisplacement, 0.15}});
+}
+
+// Eleven cubes on a ramp of tan 0.45 whose friction with it is 0, 0.1, .. 1.0 (geometric mean with the ramp's 1.0):
+// Coulomb's law says exactly those below 0.45 slide. Bound: each of those five moves more than 1 m in 5 s (frictionless
+// it would be 50 m), and each of the other six less than 1 mm. Both solvers get it exactly.
+TEST(HardCases, FrictionRampSlidesExactlyTheBoxesBelowTheSlope) {
+    const Scene scene = sceneFile("hard/friction_ramp.json");
+    for (const Solver solver : {Solver::Defaults, Solver::SoftStep})
+        for (const bool seed : {false, true}) {
+            const SceneRun run(scene, settingsFor(scene, solver, seed));
+            for (std::size_t i = 1; i < scene.bodies.size(); ++i) {
+                const float mu = std::sqrt(scene.bodies[i].def.material.friction);
+                if (mu < 0.45f)
+                    EXPECT_GT(run.displacement(i, scene), 1.0f) << "friction " << mu << ", seed " << seed;
+                else
+                    EXPECT_LT(run.displacement(i, scene), 0.001f) << "friction " << mu << ", seed " << seed;
+            }
+        }
+}
+
+// Structures that hold by friction and their own weight, built touching: a semicircular arch of eleven voussoirs, a
+// card house (cards 2 cm thick leaning at 20 degrees) and a pyramid of ten layers 10 km from the origin, where float
+// positions are 1 mm apart. Bound: 1 cm for the arch and the pyramid (measured 0.4 and 0.7 mm with the candidate), 5 mm
+// for the cards (measured 0.4 and 1.3 mm). The defaults hold the cards and the pyramid too (0.2 mm and 0), and the arch
+// only to 0.8-1.1 cm, so the arch runs with the candidate alone.
+TEST(HardCases, ArchCardHouseAndFarPyramidStand) {
+    expectWithinBounds(sceneFile("hard/arch.json"), Solver::SoftStep, {{SceneFigure::MaxDisplacement, 0.01}});
+    for (const Solver solver : {Solver::Defaults, Solver::SoftStep}) {
+        expectWithinBounds(sceneFile("hard/card_house.json"), solver, {{SceneFigure::MaxDisplacement, 0.005}});
+        expectWithinBounds(sceneFile("hard/far_pyramid.json"), solver, {{SceneFigure::MaxDisplacement, 0.01}});
+    }
+}
+
+// Twenty dominoes, the first tipped: every one falls and they come to rest leaning on each other. Bound: all twenty
+// moved, none faster than 1 cm/s after 10 s (measured 0 with both solvers).
+TEST(HardCases, DominoesAllFallAndComeToRest) {
+    for (const Solver solver : {Solver::Defaults, Solver::SoftStep})
+        expectWithinBounds(sceneFile("hard/double_domino.json"), solver,
+                           {{SceneFigure::Moved, 20}, {SceneFigure::FinalSpeed, 0.01}});
+    const Scene scene = sceneFile("hard/double_domino.json");
+    const SceneRun run(scene, settingsFor(scene, Solver::SoftStep, true));
+    EXPECT_EQ(run.figure(SceneFigure::Moved), 20.0);
+}
+
+// 125 cubes overlapping each other and the walls of a closed box too small for them (116% of its volume). Nothing may
+// escape or be thrown: bound 0 outside, no cube faster than 1 m/s (measured 0.43 m/s with the candidate; the defaults
+// throw one at 1.14 m/s with the guess off). Not met: the pile never comes quite to rest (0.17 m/s at the end), as
+// squeezed cubes keep pushing.
+TEST(HardCases, OverfilledContainerHoldsEverything) {
+    expectWithinBounds(sceneFile("hard/container_overfilled.json"), Solver::SoftStep,
+                       {{SceneFigure::Escaped, 0}, {SceneFigure::MaxSpeed, 1.0}});
+}
+
+// A ball of restitution 1 dropped from 4 m onto a floor of restitution 1 should bounce to 4 m for ever (centre at
+// 4.5 m). Bound: no gain (the highest centre over the last 2 s of 10 s at most 4.5 m plus 1 cm) and at most 15% lost.
+// Not met: keeping the height; both solvers lose about 2% a bounce (measured 4.06 m with the candidate, 3.97 m at the
+// defaults), as a speculative contact stops the ball at the floor partway through a step.
+TEST(HardCases, BouncingBallNeitherGainsNorLosesMuchHeight) {
+    for (const Solver solver : {Solver::Defaults, Solver::SoftStep}) {
+        const Scene scene = sceneFile("hard/bouncing_ball.json");
+        const SceneRun run(scene, settingsFor(scene, solver, true));
+        const double apex = run.figure(SceneFigure::LateApex);
+        EXPECT_LE(apex, 4.5 + 0.01);
+        EXPECT_GE(apex, 0.5 + 0.85 * 4.0);
+    }
 }
 
 }  // namespace
