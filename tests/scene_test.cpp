@@ -235,6 +235,71 @@ TEST(SceneFigures, MeterMeasuresACoastingBall) {
               {"f.json", "/figures/0", "did you mean 'max_speed'"});
 }
 
+// Joints in a scene file: world anchors and axes become each body's local ones, a lattice joins grid neighbours at
+// their midpoints (leaving static pairs out), and what cannot act is refused with its place in the file.
+TEST(SceneJoints, JointsLoadInstantiateAndRefuseWhatCannotAct) {
+    const Scene scene = parseScene(R"({"settings": {"effects": ["gravity", "rotation", "joints"]},
+        "shapes": {"ball": {"type": "sphere", "radius": 0.25}},
+        "bodies": [{"shape": "ball", "type": "static", "position": [0, 5, 0]},
+                   {"shape": "ball", "position": [1, 5, 0], "rotation": {"axis": [0, 0, 1], "degrees": 90}},
+                   {"shape": "ball", "position": [2, 5, 0]}],
+        "joints": [{"type": "hinge", "bodies": [0, 1], "anchor": [0.5, 5, 0], "axis": [0, 0, 1],
+                    "limit": {"lower": -1, "upper": 1}, "motor": {"speed": 2, "max_torque": 10}},
+                   {"type": "distance", "bodies": [1, 2], "anchors": [[1, 5, 0], [2, 5, 0]]},
+                   {"type": "spring", "bodies": [1, 2], "stiffness": 50, "rest_length": 1.5}],
+        "figures": ["joint_stretch"]})",
+                                   "joints.json");
+    ASSERT_EQ(scene.joints.size(), 3u);
+    World world(scene.settings);
+    const std::vector<BodyId> ids = instantiate(scene, world);
+    ASSERT_EQ(world.jointCount(), 3u);
+    const auto& hinge = std::get<HingeJointDef>(scene.joints[0].def);
+    EXPECT_TRUE(hinge.enableLimit && hinge.enableMotor);
+    EXPECT_FLOAT_EQ(hinge.upperAngle, 1.0f);
+    EXPECT_FLOAT_EQ(hinge.maxMotorTorque, 10.0f);
+    EXPECT_FLOAT_EQ(*std::get<SpringJointDef>(scene.joints[2].def).restLength, 1.5f);
+    // Nothing has moved: every joint holds its anchors together (the rod at its length).
+    SceneFigureMeter meter(scene, world, ids);
+    EXPECT_NEAR(meter.value(world, SceneFigure::JointStretch), 0.0, 1e-6);
+
+    const Scene lattice = parseScene(R"({"shapes": {"ball": {"type": "sphere", "radius": 0.25}},
+        "generators": [{"type": "grid", "shape": "ball", "count": [3, 2, 1], "spacing": 1, "origin": [0, -2, 0]},
+                       {"type": "grid", "shape": "ball", "body_type": "static", "count": [3, 1, 1], "spacing": 1}],
+        "joints": [{"type": "ball", "lattice": {"first": 0, "count": [3, 3, 1], "along": ["x", "y"]}}]})",
+                                     "lattice.json");
+    // Along x: 2 pairs in each of 3 rows but the static top row's; along y: 2 pairs in each of 3 columns.
+    ASSERT_EQ(lattice.joints.size(), 2u * 2 + 2u * 3);
+    EXPECT_EQ(lattice.joints[0].bodyA, 0u);
+    EXPECT_EQ(lattice.joints[0].bodyB, 1u);
+    EXPECT_NEAR(lattice.joints[0].anchorA.x, 0.5f, 1e-6f);
+
+    const auto refused = [](const char* joints, std::vector<std::string> parts) {
+        const std::string text = std::string(R"({"shapes": {"ball": {"type": "sphere", "radius": 0.25}},
+            "bodies": [{"shape": "ball", "type": "static"}, {"shape": "ball", "type": "static", "position": [1, 0, 0]},
+                       {"shape": "ball", "position": [2, 0, 0]}], "joints": )") +
+                                 joints + "}";
+        parts.insert(parts.begin(), "j.json");
+        expectAll(errorOf([&] { parseScene(text, "j.json"); }), parts);
+    };
+    refused(R"([{"type": "bal", "bodies": [0, 2]}])", {"/joints/0/type", "did you mean 'ball'"});
+    refused(R"([{"type": "ball", "bodies": [0, 3]}])", {"/joints/0/bodies/1"});
+    refused(R"([{"type": "ball", "bodies": [2, 2]}])", {"/joints/0", "two different bodies"});
+    refused(R"([{"type": "ball", "bodies": [0, 1]}])", {"/joints/0", "both static"});
+    refused(R"([{"type": "ball", "bodies": [0, 2], "length": 1}])", {"/joints/0/length", "only distance joints"});
+    refused(R"([{"type": "ball", "bodies": [0, 2], "anchors": [[0, 0, 0], [1, 0, 0]]}])", {"/joints/0/anchors"});
+    refused(R"([{"type": "hinge", "bodies": [0, 2], "limit": {"lower": 1, "upper": -1}}])", {"/joints/0/limit"});
+    refused(R"([{"type": "distance", "bodies": [0, 2], "anchor": [1, 0, 0]}])", {"/joints/0", "1 mm apart"});
+    refused(R"([{"type": "ball", "lattice": {"first": 1, "count": [3, 1, 1], "along": ["x"]}}])",
+            {"/joints/0/lattice", "do not exist"});
+    expectAll(errorOf([] {
+                  parseScene(R"({"settings": {"effects": ["gravity"]}, "shapes": {"b": {"type": "sphere", "radius": 1}},
+                      "bodies": [{"shape": "b", "type": "static"}, {"shape": "b", "position": [3, 0, 0]}],
+                      "joints": [{"type": "ball", "bodies": [0, 1]}]})",
+                             "e.json");
+              }),
+              {"e.json", "/joints", "'joints'"});
+}
+
 // The runner's --set: keys named replace the scene's, the others stay, and a bad value is refused as in a file.
 TEST(SceneLoader, SettingsOverridesReplaceOnlyTheKeysTheyName) {
     Scene s = parseScene(R"({"settings": {"substeps": 2, "velocity_iterations": 12}})", "base.json");

@@ -4,10 +4,12 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 #include "rubble/body.h"
 #include "rubble/id.h"
+#include "rubble/joint.h"
 #include "rubble/settings.h"
 #include "rubble/shapes.h"
 
@@ -21,6 +23,16 @@ struct SceneBody {
     BodyDef def;
 };
 
+/// A joint of a scene (docs/scene_format.md, "Joints"), in world terms: instantiate() turns the world anchors and the
+/// axis into each body's local frame and fills in the bodies. The def's other fields (limits, motor, spring, breaking)
+/// are taken as they are.
+struct SceneJoint {
+    std::variant<DistanceJointDef, SpringJointDef, BallJointDef, HingeJointDef> def;
+    std::uint32_t bodyA = 0, bodyB = 0;  ///< indices into Scene::bodies
+    Vec3 anchorA, anchorB;               ///< world points fixed to A and to B (the same point but for rods and springs)
+    Vec3 axis{0, 1, 0};                  ///< hinges: the axis, world
+};
+
 /// Figures a scene reports at the end of a run (SCENES.md, and the hard cases' own).
 enum class SceneFigure : std::uint8_t {
     MaxDisplacement,  ///< largest distance any dynamic body's centre of mass moved from its start, m
@@ -32,8 +44,11 @@ enum class SceneFigure : std::uint8_t {
     /// scene enclosed by static walls: those that got out)
     Escaped,
     LateApex,  ///< highest centre of mass of any dynamic body over the last 2 s of the run, m
+    /// Largest distance between a joint's two anchors (ball and hinge joints), or of a rod's anchors from its length
+    /// (distance joints), after the last step, m. Springs stretch by design and are left out.
+    JointStretch,
 };
-inline constexpr int kSceneFigureCount = 7;
+inline constexpr int kSceneFigureCount = 8;
 /// The figure's name in scene files ("max_displacement", ...).
 std::string_view sceneFigureName(SceneFigure f);
 
@@ -45,6 +60,7 @@ struct Scene {
     std::vector<std::string> shapeNames;
     std::vector<ShapeDef> shapes;
     std::vector<SceneBody> bodies;  ///< explicit bodies first, then generated ones in file order
+    std::vector<SceneJoint> joints;
     std::vector<SceneFigure> figures;
 };
 
@@ -83,9 +99,16 @@ private:
     double maxSpeed_ = 0;
     double time_ = 0;
     std::vector<std::pair<double, double>> apexes_;  ///< (time, highest centre) per step of the last 2 s
+    /// JointStretch: per joint, its bodies, local anchors and rod length (0 for ball and hinge joints).
+    struct JointAnchors {
+        BodyId a, b;
+        Vec3 localA, localB;
+        float length = 0;
+    };
+    std::vector<JointAnchors> joints_;
 };
 
-/// Creates the scene's shapes and bodies in `world`; returns the body handles in Scene::bodies order.
+/// Creates the scene's shapes, bodies and joints in `world`; returns the body handles in Scene::bodies order.
 std::vector<BodyId> instantiate(const Scene& scene, World& world);
 
 }  // namespace rubble

@@ -1,5 +1,7 @@
-// Turning a loaded Scene into shapes and bodies of a World.
+// Turning a loaded Scene into shapes, bodies and joints of a World.
 #include <string>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "rubble/error.h"
@@ -43,6 +45,33 @@ std::vector<BodyId> instantiate(const Scene& scene, World& world) {
             // Scene bodies keep no JSON path (generated ones have none); name the body by its creation index.
             throw Error(file + ": body " + std::to_string(i) + " (shape '" + scene.shapeNames[b.shape] +
                         "'): " + e.what());
+        }
+    }
+    // Joints: world anchors and axes into each body's frame (the bodies stand where the file put them).
+    for (std::size_t i = 0; i < scene.joints.size(); ++i) {
+        const SceneJoint& j = scene.joints[i];
+        if (j.bodyA >= bodies.size() || j.bodyB >= bodies.size())
+            throw Error(file + ": joint " + std::to_string(i) + " names bodies " + std::to_string(j.bodyA) + " and " +
+                        std::to_string(j.bodyB) + ", but the scene has " + std::to_string(bodies.size()));
+        const Transform a = world.transform(bodies[j.bodyA]), b = world.transform(bodies[j.bodyB]);
+        const auto local = [](const Transform& t, Vec3 p) { return rotate(conjugate(t.rotation), p - t.position); };
+        try {
+            std::visit(
+                [&](auto def) {
+                    def.bodyA = bodies[j.bodyA];
+                    def.bodyB = bodies[j.bodyB];
+                    def.localAnchorA = local(a, j.anchorA);
+                    def.localAnchorB = local(b, j.anchorB);
+                    if constexpr (std::is_same_v<decltype(def), HingeJointDef>) {
+                        def.localAxisA = rotate(conjugate(a.rotation), j.axis);
+                        def.localAxisB = rotate(conjugate(b.rotation), j.axis);
+                    }
+                    world.createJoint(def);
+                },
+                j.def);
+        } catch (const Error& e) {
+            throw Error(file + ": joint " + std::to_string(i) + " (bodies " + std::to_string(j.bodyA) + " and " +
+                        std::to_string(j.bodyB) + "): " + e.what());
         }
     }
     return bodies;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <variant>
 
 #include "rubble/scene.h"
 #include "rubble/world.h"
@@ -43,6 +44,8 @@ std::string_view sceneFigureName(SceneFigure f) {
             return "escaped";
         case SceneFigure::LateApex:
             return "late_apex";
+        case SceneFigure::JointStretch:
+            return "joint_stretch";
     }
     return "unknown";
 }
@@ -63,6 +66,17 @@ SceneFigureMeter::SceneFigureMeter(const Scene& scene, const World& world, const
         if (world.bodyType(id) != BodyType::Dynamic) continue;
         dynamic_.push_back(id);
         starts_.push_back(world.centerOfMass(id));
+    }
+    if (!wants(figures_, SceneFigure::JointStretch)) return;
+    for (const SceneJoint& j : scene.joints) {
+        if (std::holds_alternative<SpringJointDef>(j.def) || j.bodyA >= bodies.size() || j.bodyB >= bodies.size())
+            continue;
+        const Transform a = world.transform(bodies[j.bodyA]), b = world.transform(bodies[j.bodyB]);
+        JointAnchors anchors{bodies[j.bodyA], bodies[j.bodyB], rotate(conjugate(a.rotation), j.anchorA - a.position),
+                             rotate(conjugate(b.rotation), j.anchorB - b.position)};
+        if (const auto* rod = std::get_if<DistanceJointDef>(&j.def))
+            anchors.length = rod->length ? *rod->length : length(j.anchorB - j.anchorA);
+        joints_.push_back(anchors);
     }
 }
 
@@ -143,6 +157,16 @@ std::vector<SceneFigureMeter::Result> SceneFigureMeter::results(const World& wor
                 out.push_back(
                     {f, escaped,
                      format("bodies outside the static bodies' box: %.0f", escaped) + format(" of %.0f", count)});
+                break;
+            }
+            case SceneFigure::JointStretch: {
+                double largest = 0;
+                for (const JointAnchors& j : joints_) {
+                    const double apart =
+                        length(apply(world.transform(j.b), j.localB) - apply(world.transform(j.a), j.localA));
+                    largest = std::max(largest, std::fabs(apart - j.length));
+                }
+                out.push_back({f, largest, format("largest joint stretch: %.4f m", largest)});
                 break;
             }
             case SceneFigure::LateApex: {

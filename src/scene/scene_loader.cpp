@@ -527,6 +527,9 @@ struct Builder {
     void parseBodies(const Json& j, const Loc& at);
     void parseGenerators(const Json& j, const Loc& at);
     void parseFigures(const Json& j, const Loc& at);
+    void parseJoints(const Json& j, const Loc& at);
+    /// One joint between bodies a and b (indices checked) from the keys of `o`; anchors default to the midpoint.
+    SceneJoint jointFrom(const Json& o, const Loc& at, const std::string& type, std::uint32_t a, std::uint32_t b) const;
     void reserveBodies(double count, const Loc& at) const;
 };
 
@@ -1107,6 +1110,170 @@ void Builder::parseFigures(const Json& j, const Loc& at) {
     }
 }
 
+SceneJoint Builder::jointFrom(const Json& o, const Loc& at, const std::string& type, std::uint32_t a,
+                              std::uint32_t b) const {
+    const SceneBody &bodyA = scene.bodies[a], &bodyB = scene.bodies[b];
+    if (a == b) at.fail("a joint needs two different bodies (got body " + std::to_string(a) + " twice)");
+    if (bodyA.def.type == BodyType::Static && bodyB.def.type == BodyType::Static)
+        at.fail("bodies " + std::to_string(a) + " and " + std::to_string(b) + " are both static");
+    SceneJoint joint;
+    joint.bodyA = a, joint.bodyB = b;
+    const Vec3 midpoint = (bodyA.def.position + bodyB.def.position) * 0.5f;
+    joint.anchorA = joint.anchorB = midpoint;
+    const bool rod = type == "distance" || type == "spring";
+    if (o.contains("anchor") && o.contains("anchors")) at.fail("give 'anchor' or 'anchors', not both");
+    if (o.contains("anchor")) joint.anchorA = joint.anchorB = getVec3(o["anchor"], at / "anchor");
+    if (o.contains("anchors")) {
+        const Loc al = at / "anchors";
+        if (!rod) al.fail("only distance and spring joints have two anchors; a " + type + " joint has one ('anchor')");
+        if (!o["anchors"].is_array() || o["anchors"].size() != 2)
+            al.fail("expected two points [[x, y, z], [x, y, z]], got " + describe(o["anchors"]));
+        joint.anchorA = getVec3(o["anchors"][0], al / 0);
+        joint.anchorB = getVec3(o["anchors"][1], al / 1);
+    }
+    JointBase base;
+    if (o.contains("collide_connected"))
+        base.collideConnected = getBool(o["collide_connected"], at / "collide_connected");
+    if (o.contains("break_force")) base.breakForce = getFloat(o["break_force"], at / "break_force", Sign::Positive);
+    if (o.contains("break_torque")) base.breakTorque = getFloat(o["break_torque"], at / "break_torque", Sign::Positive);
+    if (type == "distance") {
+        DistanceJointDef d;
+        static_cast<JointBase&>(d) = base;
+        if (o.contains("length")) {
+            d.length = getFloat(o["length"], at / "length", Sign::Positive);
+            if (*d.length < 1e-3f) (at / "length").fail("must be >= 0.001 m (use a ball joint for coincident anchors)");
+        } else if (!(length(joint.anchorB - joint.anchorA) >= 1e-3f)) {
+            at.fail("a distance joint's anchors must be at least 1 mm apart (give 'anchors' or 'length')");
+        }
+        joint.def = d;
+    } else if (type == "spring") {
+        SpringJointDef d;
+        static_cast<JointBase&>(d) = base;
+        if (o.contains("stiffness")) d.stiffness = getFloat(o["stiffness"], at / "stiffness", Sign::NonNegative);
+        if (o.contains("damping")) d.damping = getFloat(o["damping"], at / "damping", Sign::NonNegative);
+        if (o.contains("rest_length")) d.restLength = getFloat(o["rest_length"], at / "rest_length", Sign::NonNegative);
+        joint.def = d;
+    } else if (type == "ball") {
+        BallJointDef d;
+        static_cast<JointBase&>(d) = base;
+        joint.def = d;
+    } else {  // hinge
+        HingeJointDef d;
+        static_cast<JointBase&>(d) = base;
+        if (o.contains("axis")) {
+            joint.axis = getVec3(o["axis"], at / "axis");
+            if (!(length(joint.axis) > 0)) (at / "axis").fail("axis must not be zero");
+        }
+        if (o.contains("limit")) {
+            const Loc ll = at / "limit";
+            const Json& l = expectObject(o["limit"], ll, "a limit object {\"lower\": rad, \"upper\": rad}");
+            checkKeys(l, ll, {"lower", "upper"});
+            require(l, ll, "lower");
+            require(l, ll, "upper");
+            d.enableLimit = true;
+            d.lowerAngle = getFloat(l["lower"], ll / "lower");
+            d.upperAngle = getFloat(l["upper"], ll / "upper");
+            constexpr float kPi = 3.14159265358979f;
+            if (!(d.lowerAngle >= -kPi && d.upperAngle <= kPi && d.lowerAngle <= d.upperAngle))
+                ll.fail("needs -pi <= lower <= upper <= pi (got [" + formatNumber(d.lowerAngle) + ", " +
+                        formatNumber(d.upperAngle) + "])");
+        }
+        if (o.contains("motor")) {
+            const Loc ml = at / "motor";
+            const Json& m = expectObject(o["motor"], ml, "a motor object {\"speed\": rad/s, \"max_torque\": N m}");
+            checkKeys(m, ml, {"speed", "max_torque"});
+            require(m, ml, "speed");
+            require(m, ml, "max_torque");
+            d.enableMotor = true;
+            d.motorSpeed = getFloat(m["speed"], ml / "speed");
+            d.maxMotorTorque = getFloat(m["max_torque"], ml / "max_torque", Sign::NonNegative);
+        }
+        joint.def = d;
+    }
+    return joint;
+}
+
+void Builder::parseJoints(const Json& j, const Loc& at) {
+    const Json& arr = expectArray(j, at, "an array of joints");
+    if (!arr.empty() && !scene.settings.effects.has(Effect::Joints))
+        at.fail("the scene has joints but its settings' effects leave out 'joints': add it, or they would not act");
+    const auto bodyIndex = [&](const Json& v, const Loc& l) {
+        if (scene.bodies.empty()) l.fail("the scene has no bodies to join");
+        return static_cast<std::uint32_t>(getInt(v, l, 0, static_cast<std::int64_t>(scene.bodies.size()) - 1));
+    };
+    for (std::size_t i = 0; i < arr.size(); ++i) {
+        const Loc jl = at / i;
+        const Json& o = expectObject(arr[i], jl, "a joint object");
+        checkKeys(o, jl,
+                  {"type", "bodies", "lattice", "anchor", "anchors", "axis", "collide_connected", "break_force",
+                   "break_torque", "length", "stiffness", "damping", "rest_length", "limit", "motor"});
+        require(o, jl, "type");
+        const std::string& type = getString(o["type"], jl / "type");
+        if (type != "distance" && type != "spring" && type != "ball" && type != "hinge")
+            (jl / "type")
+                .fail("unknown joint type '" + printable(type) + "'" +
+                      suggestion(type, std::initializer_list<std::string_view>{"distance", "spring", "ball", "hinge"}));
+        const std::string_view springKeys[] = {"stiffness", "damping", "rest_length"};
+        for (const std::string_view k : springKeys)
+            if (o.contains(k) && type != "spring") (jl / k).fail("only spring joints have '" + std::string(k) + "'");
+        if (o.contains("length") && type != "distance") (jl / "length").fail("only distance joints have 'length'");
+        for (const char* k : {"axis", "limit", "motor"})
+            if (o.contains(k) && type != "hinge") (jl / k).fail(std::string("only hinges have '") + k + "'");
+        if (o.contains("bodies") == o.contains("lattice")) jl.fail("give exactly one of 'bodies' and 'lattice'");
+        if (o.contains("bodies")) {
+            const Loc bl = jl / "bodies";
+            if (!o["bodies"].is_array() || o["bodies"].size() != 2)
+                bl.fail("expected two body indices [a, b], got " + describe(o["bodies"]));
+            scene.joints.push_back(
+                jointFrom(o, jl, type, bodyIndex(o["bodies"][0], bl / 0), bodyIndex(o["bodies"][1], bl / 1)));
+            continue;
+        }
+        // A lattice: the bodies [first, first + nx ny nz) laid out as a grid generator lays them (layer y outermost,
+        // then x, then z), each joined to its next neighbour along the axes named, at their midpoint.
+        const Loc ll = jl / "lattice";
+        const Json& l = expectObject(o["lattice"], ll, "a lattice object");
+        checkKeys(l, ll, {"first", "count", "along"});
+        for (const char* k : {"first", "count", "along"}) require(l, ll, k);
+        if (o.contains("anchor") || o.contains("anchors"))
+            jl.fail("a lattice joins neighbours at their midpoints: it takes no 'anchor' or 'anchors'");
+        const std::uint32_t first = bodyIndex(l["first"], ll / "first");
+        const Loc cl = ll / "count";
+        if (!l["count"].is_array() || l["count"].size() != 3)
+            cl.fail("expected an array of 3 integers [nx, ny, nz], got " + describe(l["count"]));
+        std::int64_t count[3];
+        for (std::size_t a = 0; a < 3; ++a) count[a] = getInt(l["count"][a], cl / a, 1, 1'000'000'000);
+        const double total = double(count[0]) * double(count[1]) * double(count[2]);
+        if (double(first) + total > double(scene.bodies.size()))
+            ll.fail("bodies " + std::to_string(first) + " .. " + formatNumber(double(first) + total - 1) +
+                    " do not exist (the scene has " + std::to_string(scene.bodies.size()) + ")");
+        const Loc al = ll / "along";
+        const Json& along = expectArray(l["along"], al, "an array of axis names (\"x\", \"y\", \"z\")");
+        bool axes[3] = {false, false, false};
+        for (std::size_t k = 0; k < along.size(); ++k) {
+            const std::string& name = getString(along[k], al / k);
+            if (name != "x" && name != "y" && name != "z") (al / k).fail("expected \"x\", \"y\" or \"z\"");
+            axes[name[0] - 'x'] = true;
+        }
+        const std::int64_t nx = count[0], ny = count[1], nz = count[2];
+        const auto at3 = [&](std::int64_t ix, std::int64_t iy, std::int64_t iz) {
+            return static_cast<std::uint32_t>(first + iy * nx * nz + ix * nz + iz);
+        };
+        // Two static neighbours (a fixed edge) have nothing to join.
+        const auto join = [&](std::uint32_t a, std::uint32_t b) {
+            if (scene.bodies[a].def.type == BodyType::Static && scene.bodies[b].def.type == BodyType::Static) return;
+            scene.joints.push_back(jointFrom(o, jl, type, a, b));
+        };
+        for (std::int64_t iy = 0; iy < ny; ++iy)
+            for (std::int64_t ix = 0; ix < nx; ++ix)
+                for (std::int64_t iz = 0; iz < nz; ++iz) {
+                    const std::uint32_t self = at3(ix, iy, iz);
+                    if (axes[0] && ix + 1 < nx) join(self, at3(ix + 1, iy, iz));
+                    if (axes[1] && iy + 1 < ny) join(self, at3(ix, iy + 1, iz));
+                    if (axes[2] && iz + 1 < nz) join(self, at3(ix, iy, iz + 1));
+                }
+    }
+}
+
 }  // namespace
 
 Scene parseScene(std::string_view text, const std::string& sourceName) {
@@ -1120,7 +1287,8 @@ Scene parseScene(std::string_view text, const std::string& sourceName) {
     const Loc root = b.root();
     if (!doc.is_object()) throw Error(sourceName + ": the top level must be an object, got " + describe(doc));
     checkKeys(doc, root,
-              {"name", "description", "steps", "settings", "materials", "shapes", "bodies", "generators", "figures"});
+              {"name", "description", "steps", "settings", "materials", "shapes", "bodies", "generators", "joints",
+               "figures"});
     if (doc.contains("name")) b.scene.name = getString(doc["name"], root / "name");
     if (doc.contains("description")) getString(doc["description"], root / "description");
     if (doc.contains("steps")) b.scene.steps = static_cast<int>(getInt(doc["steps"], root / "steps", 0, 1'000'000'000));
@@ -1129,6 +1297,7 @@ Scene parseScene(std::string_view text, const std::string& sourceName) {
     if (doc.contains("shapes")) b.parseShapes(doc["shapes"], root / "shapes");
     if (doc.contains("bodies")) b.parseBodies(doc["bodies"], root / "bodies");
     if (doc.contains("generators")) b.parseGenerators(doc["generators"], root / "generators");
+    if (doc.contains("joints")) b.parseJoints(doc["joints"], root / "joints");
     if (doc.contains("figures")) b.parseFigures(doc["figures"], root / "figures");
     return std::move(b.scene);
 }
