@@ -75,8 +75,8 @@ struct SolverSettings {
     float restitutionThreshold = 1.0f;
     /// Soft step: stiffness of contacts as a natural frequency (capped at a quarter of the substep rate), Hz, and
     /// damping ratio. Contacts against static bodies use twice the frequency. 60 Hz is the cap at four substeps of
-    /// 60 Hz steps; 30 Hz (Box2D's) lets a heavy box on a light one and a dropped tower fall, and stiffer contacts than
-    /// the cap are more than two iterations converge (S5 falls at 120 Hz).
+    /// 60 Hz steps; Box3D's 30 Hz (with one iteration and one relax a substep) lets a dropped tower fall, and contacts
+    /// stiffer than the cap need more than two iterations to converge (S5 falls at 120 Hz).
     float contactHertz = 60.0f;
     float contactDampingRatio = 10.0f;
     /// Soft step: stiffness of rigid joints (distance, ball, hinge) as a natural frequency (capped at a quarter of

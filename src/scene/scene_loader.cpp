@@ -20,6 +20,7 @@
 #include <span>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -1164,29 +1165,28 @@ SceneJoint Builder::jointFrom(const Json& o, const Loc& at, const std::string& t
             joint.axis = getVec3(o["axis"], at / "axis");
             if (!(length(joint.axis) > 0)) (at / "axis").fail("axis must not be zero");
         }
+        // An object of exactly two numbers, as the limit and the motor are.
+        const auto numberPair = [&](const char* key, const char* first, const char* second, Sign secondSign) {
+            const Loc l = at / key;
+            const Json& pair =
+                expectObject(o[key], l, std::string("an object {\"") + first + "\": .., \"" + second + "\": ..}");
+            checkKeys(pair, l, {first, second});
+            require(pair, l, first);
+            require(pair, l, second);
+            return std::pair{getFloat(pair[first], l / first), getFloat(pair[second], l / second, secondSign)};
+        };
         if (o.contains("limit")) {
-            const Loc ll = at / "limit";
-            const Json& l = expectObject(o["limit"], ll, "a limit object {\"lower\": rad, \"upper\": rad}");
-            checkKeys(l, ll, {"lower", "upper"});
-            require(l, ll, "lower");
-            require(l, ll, "upper");
             d.enableLimit = true;
-            d.lowerAngle = getFloat(l["lower"], ll / "lower");
-            d.upperAngle = getFloat(l["upper"], ll / "upper");
+            std::tie(d.lowerAngle, d.upperAngle) = numberPair("limit", "lower", "upper", Sign::Any);
             constexpr float kPi = 3.14159265358979f;
             if (!(d.lowerAngle >= -kPi && d.upperAngle <= kPi && d.lowerAngle <= d.upperAngle))
-                ll.fail("needs -pi <= lower <= upper <= pi (got [" + formatNumber(d.lowerAngle) + ", " +
-                        formatNumber(d.upperAngle) + "])");
+                (at / "limit")
+                    .fail("needs -pi <= lower <= upper <= pi (got [" + formatNumber(d.lowerAngle) + ", " +
+                          formatNumber(d.upperAngle) + "])");
         }
         if (o.contains("motor")) {
-            const Loc ml = at / "motor";
-            const Json& m = expectObject(o["motor"], ml, "a motor object {\"speed\": rad/s, \"max_torque\": N m}");
-            checkKeys(m, ml, {"speed", "max_torque"});
-            require(m, ml, "speed");
-            require(m, ml, "max_torque");
             d.enableMotor = true;
-            d.motorSpeed = getFloat(m["speed"], ml / "speed");
-            d.maxMotorTorque = getFloat(m["max_torque"], ml / "max_torque", Sign::NonNegative);
+            std::tie(d.motorSpeed, d.maxMotorTorque) = numberPair("motor", "speed", "max_torque", Sign::NonNegative);
         }
         joint.def = d;
     }

@@ -41,7 +41,7 @@ using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 
 /// Point forces f >= 0 with sum f_i column_i = wanted (force, torque), least-norm among the exact answers.
-/// Regularised (Tikhonov, relative to the columns' mean size, then refined twice), so that what the points can
+/// Regularised (Tikhonov, relative to the columns' mean size, then refined three times), so that what the points can
 /// balance is balanced to float precision while what they can hardly balance (a sideways load on supports whose
 /// normals differ by a hair) is left unbalanced instead of being bought with huge opposing forces: the answer is at
 /// most a few times the load, however the points lie. The iterations balance what is left.
