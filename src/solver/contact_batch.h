@@ -281,7 +281,11 @@ void solve(ContactBatch& b, std::size_t lane, const BodyRows& rows, const SolveP
         const auto apart = s > F(0.0f);
         // Apart: the bodies may close the gap this substep and no more (speculative contact). Overlapping: push
         // out at a rate the correction method sets, never faster than maxPushOutVelocity.
-        F bias = simd::max(biasRate * simd::min(s + slop, F(0.0f)), maxPush);
+        // A loaded soft contact may push out as fast as its load needs (the speed at which the spring's leak and its
+        // push balance): its spring would otherwise give way under a heavy body.
+        const F loadPush =
+            at<F>(p.normalImpulse, lane) * impulseScale / simd::max(at<F>(p.normalMass, lane) * massScale, F(1e-30f));
+        F bias = simd::max(biasRate * simd::min(s + slop, F(0.0f)), simd::min(maxPush, F(0.0f) - loadPush));
         if (!params.useBias) bias = F(0.0f);
         bias = simd::select(apart, s * invH, bias);
         const F scaleM = simd::select(apart, F(1.0f), massScale);

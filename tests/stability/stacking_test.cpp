@@ -75,9 +75,9 @@ struct Stack {
 };
 
 // S1's construction with 10 layers (385 cubes) at the default settings (the soft step, four substeps of 2 + 1
-// iterations) for 5 s. Its contacts are springs: the pyramid settles by load / stiffness, under 1 mm here (bound), with
-// the resting-load guess or without. The standard scenes' Baumgarte (one substep, 8 iterations) with the guess moves it
-// 1e-9 m; S1 itself (20 layers, 600 steps) moves < 0.1 mm so.
+// iterations) for 5 s. Its contacts are springs: the pyramid settles by load / stiffness, under 1 mm here (bound). The
+// standard scenes' Baumgarte (one substep, 8 iterations) with the resting-load guess moves it 1e-9 m; S1 itself (20
+// layers, 600 steps) moves < 0.1 mm so.
 TEST(Stacking, PyramidStandsAtDefaultSettings) {
     WorldSettings s;
     s.threads = 2;
