@@ -11,6 +11,7 @@
 
 #include "rubble/scene.h"
 #include "rubble/world.h"
+#include "support/sanitized.h"
 
 namespace rubble {
 namespace {
@@ -74,6 +75,8 @@ struct Stack {
     ShapeId cubeShape;
 };
 
+// Under a sanitizer the whole-scene tests here run 10 steps (tests/support/sanitized.h).
+//
 // S1's construction with 10 layers (385 cubes) at the default settings (the soft step, four substeps of 2 + 1
 // iterations) for 5 s. Its contacts are springs: the pyramid settles by load / stiffness, under 1 mm here (bound). The
 // standard scenes' Baumgarte (one substep, 8 iterations) with the resting-load guess moves it 1e-9 m; S1 itself (20
@@ -88,7 +91,7 @@ TEST(Stacking, PyramidStandsAtDefaultSettings) {
         for (int i = 0; i < n; ++i)
             for (int j = 0; j < n; ++j) stack.add({i - (n - 1) / 2.0f, 0.5f + k, j - (n - 1) / 2.0f});
     }
-    for (int i = 0; i < 300; ++i) stack.world.step(kDt);
+    for (int i = 0; i < test::scaledSteps(300); ++i) stack.world.step(kDt);
     EXPECT_LT(stack.largestDisplacement(), 0.001f);
 }
 
@@ -164,7 +167,7 @@ TEST(Stacking, LargePyramidStandsAtDefaultSettings) {
         const std::vector<BodyId> ids = instantiate(scene, world);
         std::vector<Vec3> starts;
         for (BodyId id : ids) starts.push_back(world.position(id));
-        for (int i = 0; i < scene.steps; ++i) world.step(s.timeStep);
+        for (int i = 0; i < test::scaledSteps(scene.steps); ++i) world.step(s.timeStep);
         float largest = 0;
         for (std::size_t i = 0; i < ids.size(); ++i)
             largest = std::max(largest, length(world.position(ids[i]) - starts[i]));
