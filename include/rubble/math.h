@@ -104,5 +104,7 @@ struct Transform {
 };
 
 constexpr Vec3 apply(const Transform& t, Vec3 p) { return rotate(t.rotation, p) + t.position; }
+/// The inverse of apply: a world point in the transform's local frame.
+constexpr Vec3 applyInverse(const Transform& t, Vec3 p) { return rotate(conjugate(t.rotation), p - t.position); }
 
 }  // namespace rubble

@@ -54,14 +54,13 @@ std::vector<BodyId> instantiate(const Scene& scene, World& world) {
             throw Error(file + ": joint " + std::to_string(i) + " names bodies " + std::to_string(j.bodyA) + " and " +
                         std::to_string(j.bodyB) + ", but the scene has " + std::to_string(bodies.size()));
         const Transform a = world.transform(bodies[j.bodyA]), b = world.transform(bodies[j.bodyB]);
-        const auto local = [](const Transform& t, Vec3 p) { return rotate(conjugate(t.rotation), p - t.position); };
         try {
             std::visit(
                 [&](auto def) {
                     def.bodyA = bodies[j.bodyA];
                     def.bodyB = bodies[j.bodyB];
-                    def.localAnchorA = local(a, j.anchorA);
-                    def.localAnchorB = local(b, j.anchorB);
+                    def.localAnchorA = applyInverse(a, j.anchorA);
+                    def.localAnchorB = applyInverse(b, j.anchorB);
                     if constexpr (std::is_same_v<decltype(def), HingeJointDef>) {
                         def.localAxisA = rotate(conjugate(a.rotation), j.axis);
                         def.localAxisB = rotate(conjugate(b.rotation), j.axis);

@@ -72,8 +72,7 @@ SceneFigureMeter::SceneFigureMeter(const Scene& scene, const World& world, const
         if (std::holds_alternative<SpringJointDef>(j.def) || j.bodyA >= bodies.size() || j.bodyB >= bodies.size())
             continue;
         const Transform a = world.transform(bodies[j.bodyA]), b = world.transform(bodies[j.bodyB]);
-        JointAnchors anchors{bodies[j.bodyA], bodies[j.bodyB], rotate(conjugate(a.rotation), j.anchorA - a.position),
-                             rotate(conjugate(b.rotation), j.anchorB - b.position)};
+        JointAnchors anchors{bodies[j.bodyA], bodies[j.bodyB], applyInverse(a, j.anchorA), applyInverse(b, j.anchorB)};
         if (const auto* rod = std::get_if<DistanceJointDef>(&j.def))
             anchors.length = rod->length ? *rod->length : length(j.anchorB - j.anchorA);
         joints_.push_back(anchors);

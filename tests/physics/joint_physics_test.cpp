@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rubble/world.h"
+#include "support/standard_solver.h"
 
 namespace rubble {
 namespace {
@@ -17,13 +18,10 @@ constexpr double kPi = 3.14159265358979323846;
 /// The solver these tests' measurements were made with: Baumgarte, 8 iterations, one substep unless asked (the
 /// standard scenes' solver; the defaults' soft step has its own tests below).
 World makeWorld(Vec3 gravity = {0, -kG, 0}, int substeps = 1) {
-    WorldSettings s;
+    WorldSettings s = test::withStandardScenesSolver(WorldSettings{});
     s.threads = 1;
     s.gravity = gravity;
     s.substeps = substeps;
-    s.velocityIterations = 8;
-    s.positionIterations = 2;
-    s.solver.positionCorrection = PositionCorrection::Baumgarte;
     // Awake throughout: a weight hanging still would fall asleep, and a sleeping joint reports no force.
     s.effects = s.effects.without(Effect::Sleeping);
     return World(s);
@@ -257,11 +255,8 @@ TEST(JointPhysics, BallJointChainHangsWithEveryPositionCorrection) {
     EXPECT_LT(s.whileFalling, 0.04f);
     EXPECT_LT(s.hanging, 0.004f);
     EXPECT_NEAR(s.bottom, -4.0f, 0.05f);
-    WorldSettings split;
+    WorldSettings split = test::withStandardScenesSolver(WorldSettings{});
     split.threads = 1;
-    split.substeps = 1;
-    split.velocityIterations = 8;
-    split.positionIterations = 2;
     split.solver.positionCorrection = PositionCorrection::SplitImpulse;
     const ChainErrors p = hangChain(World(split));
     EXPECT_LT(p.whileFalling, 0.12f);

@@ -14,6 +14,7 @@
 #include "rubble/scene.h"
 #include "rubble/world.h"
 #include "support/sanitized.h"
+#include "support/standard_solver.h"
 
 namespace rubble {
 namespace {
@@ -43,12 +44,7 @@ WorldSettings settingsFor(const Scene& scene, Solver solver, bool seed) {
     s.substeps = defaults.substeps;
     s.velocityIterations = defaults.velocityIterations;
     s.positionIterations = defaults.positionIterations;
-    if (solver == Solver::Baumgarte) {
-        s.solver.positionCorrection = PositionCorrection::Baumgarte;
-        s.substeps = 1;
-        s.velocityIterations = 8;
-        s.positionIterations = 2;
-    }
+    if (solver == Solver::Baumgarte) s = test::withStandardScenesSolver(s);
     s.solver.seedRestingLoads = seed;
     s.threads = 2;
     return s;

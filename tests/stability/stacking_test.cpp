@@ -12,6 +12,7 @@
 #include "rubble/scene.h"
 #include "rubble/world.h"
 #include "support/sanitized.h"
+#include "support/standard_solver.h"
 
 namespace rubble {
 namespace {
@@ -33,14 +34,7 @@ WorldSettings softStepSubsteps() {
 }
 
 /// The standard scenes' solver (S1-S4): Baumgarte, 8 iterations, one substep.
-WorldSettings baumgarte() {
-    WorldSettings s;
-    s.substeps = 1;
-    s.velocityIterations = 8;
-    s.positionIterations = 2;
-    s.solver.positionCorrection = PositionCorrection::Baumgarte;
-    return s;
-}
+WorldSettings baumgarte() { return test::withStandardScenesSolver(WorldSettings{}); }
 
 struct Stack {
     World world;
