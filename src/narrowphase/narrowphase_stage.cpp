@@ -9,6 +9,7 @@
 #include "narrowphase/box_box.h"
 #include "narrowphase/convex_pairs.h"
 #include "narrowphase/hull_pairs.h"
+#include "narrowphase/mesh_manifolds.h"
 #include "narrowphase/triangle_pairs.h"
 #include "narrowphase/triangle_reach.h"
 #include "parallel.h"
@@ -231,7 +232,8 @@ void collide(PairKernel kernel, const Posed& a, const Posed& b, float margin, co
 
 /// Body A against the triangles of a run job (against the mesh `mesh`, prepared for A): the vertices of all of them
 /// are fetched first, the reach tests (triangle_reach.h) run over them in SIMD lanes, and the exact kernel only sees
-/// the triangles they leave. Touching triangles are appended to the chunk's mesh manifolds.
+/// the triangles they leave. Touching triangles are appended to the chunk's mesh manifolds, those that share a normal
+/// merged (mesh_manifolds.h).
 template <class HullMap>
 void collideTriangles(const NarrowPhaseStage::Job& job, const std::uint32_t* triangles, const Posed& a,
                       const MeshSide& mesh, float margin, const HullMap& hulls, NarrowPhaseStage::Chunk& chunk,
@@ -277,6 +279,7 @@ void collideTriangles(const NarrowPhaseStage::Job& job, const std::uint32_t* tri
             std::fill(inReach, inReach + count, true);  // hulls: no reach test, every triangle to the kernel
             break;
     }
+    const std::size_t firstOutput = chunk.meshManifolds.size();
     Manifold out;
     for (std::size_t k = 0; k < count; ++k) {
         if (!inReach[k]) continue;
@@ -308,6 +311,7 @@ void collideTriangles(const NarrowPhaseStage::Job& job, const std::uint32_t* tri
         chunk.meshPairs.push_back(pair);
         chunk.meshManifolds.push_back(out);
     }
+    mergeTriangleManifolds(chunk.meshPairs, chunk.meshManifolds, firstOutput);
 }
 
 /// Memory of the triangle runs after job j while job j runs (its kernels take microseconds): the vertices of job
@@ -782,11 +786,12 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
         };
         // A is the body whose shape kind is lower, so each kernel sees its shapes in its own argument order.
         // Compounds expand into one job per child (per child pair for two compounds), in child order.
-        // `run`: for a body against a mesh, the index of its triangle in meshTriangles (a run of one); else ~0u.
+        // `run`: for a body against a mesh, the index of its first triangle in meshTriangles, and `runLength` the
+        // number of its triangles; else ~0u. A compound's child gets the whole run.
         auto addJob = [&](std::uint32_t first, bool firstStatic, std::uint32_t second, bool secondStatic,
-                          std::uint32_t run) {
+                          std::uint32_t run, std::uint32_t runLength = 0) {
             const std::uint32_t triangle = run == ~0u ? ~0u : candidates.meshTriangles[run];
-            const std::uint32_t runLength = run == ~0u ? 0u : 1u, runStart = run == ~0u ? 0u : run;
+            const std::uint32_t runStart = run == ~0u ? 0u : run;
             const std::uint32_t shape1 = firstStatic ? storage.statics.shape[first] : storage.moving.shape[first];
             const std::uint32_t shape2 = secondStatic ? storage.statics.shape[second] : storage.moving.shape[second];
             const ShapeKind kind1 = tables_.kind[shape1], kind2 = tables_.kind[shape2];
@@ -839,9 +844,10 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             addJob(p.a, false, p.b, true, ~0u);
             closePending(pendingBefore);
         }
-        // A body against a mesh (always B): one job per run of its triangles in the chunk. Mesh pairs hold
-        // consecutive runs of meshTriangles, so the pair of the chunk's first triangle is found once and then
-        // followed.
+        // A body against a mesh (always B): one job for each run of its triangles that starts in the chunk, the
+        // whole run, so that the run's manifolds can be merged (mesh_manifolds.h) and are reused or kept whole.
+        // Mesh pairs hold consecutive runs of meshTriangles, so the pair of the chunk's first triangle is found once
+        // and then followed.
         if (end > movingCount + staticCount) {
             const auto first =
                 static_cast<std::uint32_t>(std::max(begin, movingCount + staticCount) - movingCount - staticCount);
@@ -849,26 +855,18 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
                                          [](std::uint32_t t, const MeshPair& m) { return t < m.firstTriangle; }) -
                         1;
             const auto last = static_cast<std::uint32_t>(end - movingCount - staticCount);
-            for (auto t = first; t < last; ++mesh) {
-                const std::uint32_t runEnd = std::min(last, mesh->firstTriangle + mesh->triangleCount);
+            // A run that started in an earlier chunk is that chunk's.
+            auto t = mesh->firstTriangle < first ? mesh->firstTriangle + mesh->triangleCount : first;
+            for (; t < last; ++mesh) {
+                const std::uint32_t runEnd = mesh->firstTriangle + mesh->triangleCount;
                 if (t >= runEnd) continue;
-                // Only a run that lies whole in the chunk is reused or kept: every chunk it spans decides alike.
-                const bool whole = t == mesh->firstTriangle && runEnd == mesh->firstTriangle + mesh->triangleCount;
                 const std::size_t pendingBefore = chunk.pending.size();
-                if (reuse && whole && reuseOrKeep(ManifoldReuse::Section::Mesh, mesh->moving, mesh->staticBody, true)) {
+                if (reuse && reuseOrKeep(ManifoldReuse::Section::Mesh, mesh->moving, mesh->staticBody, true)) {
                     t = runEnd;
                     continue;
                 }
-                // The body's job for its first triangle here grows to the rest of its run (a compound body makes
-                // one job per child and triangle, in that order, so it goes through addJob for every triangle).
-                const std::size_t at = chunk.jobs.size();
-                addJob(mesh->moving, false, mesh->staticBody, true, t);
-                if (chunk.jobs.size() != at + 1 || chunk.jobs[at].pair.childA != kNoChild) {
-                    for (++t; t < runEnd; ++t) addJob(mesh->moving, false, mesh->staticBody, true, t);
-                    closePending(pendingBefore);
-                    continue;
-                }
-                chunk.jobs[at].triangles = runEnd - t;
+                // One job over the whole run (a compound body: one per child, in child order).
+                addJob(mesh->moving, false, mesh->staticBody, true, t, runEnd - t);
                 t = runEnd;
                 closePending(pendingBefore);
             }

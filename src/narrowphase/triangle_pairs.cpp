@@ -279,7 +279,10 @@ int collideSphereTriangle(Vec3 center, float radius, const TriangleVertices& tri
     const float depth = radius + dot(p - q.point, n);
     if (depth < -margin) return 0;
     out.normal = n;
-    addPoint(out, origin + q.point, depth, std::uint32_t(q.feature));
+    // Along the face normal the sphere touches the plane under its centre, wherever the closest point of this
+    // triangle is: a point off that line would turn the sphere as it pushes (a rolling sphere's side moves along n).
+    const Vec3 point = useFace ? p - faceN * h : q.point;
+    addPoint(out, origin + point, depth, std::uint32_t(q.feature));
     return 1;
 }
 
@@ -391,12 +394,16 @@ int collideCapsuleTriangle(const CapsuleSegment& capsule, const TriangleVertices
         const int end = dot(s1, n) > dot(s0, n) ? 1 : 0;
         const Vec3 deeper = end == 1 ? s1 : s0;
         const TrianglePoint q = closestOnTriangle(deeper, v[0], v[1], v[2]);
-        addPoint(out, origin + q.point, radius + dot(deeper - q.point, n), std::uint32_t((1 + end) * 8 + q.feature));
+        const Vec3 under = deeper - faceN * dot(faceN, deeper);
+        addPoint(out, origin + under, radius + dot(deeper - under, n), std::uint32_t((1 + end) * 8 + q.feature));
         return 1;
     }
     const float depth = radius + dot(closest - best.onTriangle, n);
     if (depth < -margin) return 0;
-    addPoint(out, origin + best.onTriangle, depth, std::uint32_t(best.segment * 8 + best.feature));
+    // Along the face normal the capsule touches the plane under its segment (as for the sphere): a point off that
+    // line would turn a rolling capsule as it pushes.
+    const Vec3 point = useFace ? closest - faceN * dot(faceN, closest) : best.onTriangle;
+    addPoint(out, origin + point, depth, std::uint32_t(best.segment * 8 + best.feature));
     return 1;
 }
 

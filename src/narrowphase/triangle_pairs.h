@@ -82,6 +82,14 @@ struct HullAdjacency;
 
 using TriangleVertices = std::array<Vec3, 3>;
 
+/// Whether a feature id (above) depends on the triangle: anything but a vertex of the body's own incident face (box
+/// and hull, kind 0) or a sphere's or capsule's code. Ids that do not stay the same as the body moves from one
+/// triangle to the next of a flat floor, so warm starting can follow a box's corner across the floor.
+inline bool featureOfTriangle(std::uint32_t feature) {
+    const std::uint32_t kind = feature >> 30, point = feature & 0xFFFFu;
+    return kind != 0 || (point & 0x8000u) != 0 || point == 0x7FFFu;
+}
+
 /// Box or hull edge x triangle edge axes whose cross product is shorter than this (sine of the angle) are skipped.
 inline constexpr float kTriangleEdgeParallelEpsilon = 1e-3f;
 /// A capsule gets two points on a face when the sine of the angle between its axis and the face is below this.

@@ -6,7 +6,7 @@
 // indices[3t + (e + 1) % 3]; for a heightfield: the vertices heightfieldTriangle() returns). An edge is
 //  - Boundary: no neighbour (or shared by more than two triangles, or next to a zero-area triangle);
 //  - Convex:   the neighbour falls away below this triangle's plane (a ridge);
-//  - Flat:     the neighbour is coplanar within kFlatEdgeSine (sine of the dihedral angle);
+//  - Flat:     the neighbour is within kFlatEdgeSine (sine of the dihedral angle) of this triangle's plane;
 //  - Concave:  the neighbour rises above this triangle's plane (a valley).
 // Boundary and convex edges are "active": a contact there may take an edge or vertex normal. Flat and concave
 // edges are inactive: the neighbouring surface covers them, so a normal there must be the face normal.
@@ -25,8 +25,11 @@ namespace rubble::detail {
 enum class EdgeKind : std::uint8_t { Boundary, Convex, Flat, Concave };
 
 inline constexpr std::uint32_t kNoNeighbour = ~0u;
-/// Dihedral angles whose sine is below this count as flat (about 0.06 degrees).
-inline constexpr float kFlatEdgeSine = 1e-3f;
+/// Dihedral angles whose sine is below this count as flat: 5 degrees, the threshold Jolt uses for its active edges.
+/// A kink this small is the tessellation of a smooth surface (a terrain of 1 m cells bends by a few degrees an edge),
+/// where the face normal is the surface's; taken as an edge, it throws a rolling ball up as it passes (speculative
+/// contacts extrapolate the approach to a vertex or edge linearly, and stop what would not have touched).
+inline constexpr float kFlatEdgeSine = 0.0872f;
 /// All three edges active: the flags of a lone triangle (no ghost suppression at all).
 inline constexpr std::uint8_t kAllEdgesActive = 7;
 

@@ -237,7 +237,7 @@ TEST(NarrowPhaseStage, BodiesOnAFlatMeshTouchItWithTheFaceNormalEvenOverInternal
         for (float z : xs) {
             scene.addMoving(ball, {x, 0.5f - sink, z}, {});
             scene.addMoving(cube, {x + 0.01f, 0.5f - sink, z + 0.013f}, {});
-            scene.addMoving(pill, {x, 0.8f - sink, z}, Quat::fromAxisAngle({0, 0, 1}, 1.5707964f));
+            scene.addMoving(pill, {x, 0.3f - sink, z}, Quat::fromAxisAngle({0, 0, 1}, 1.5707964f));  // lying
         }
     CandidatePairs candidates;
     const Contacts contacts = runStages(scene, broad, 2, 0.02f, candidates);
@@ -250,7 +250,9 @@ TEST(NarrowPhaseStage, BodiesOnAFlatMeshTouchItWithTheFaceNormalEvenOverInternal
         for (int p = 0; p < contacts.manifolds[k].pointCount; ++p)
             EXPECT_NEAR(contacts.manifolds[k].points[p].depth, sink, 1e-4f);
     }
-    EXPECT_GT(meshContacts, 108) << "every body touches at least one triangle";
+    // Every body touches the floor through one manifold: its triangles' manifolds share the face normal and are
+    // merged (mesh_manifolds.h).
+    EXPECT_EQ(meshContacts, 108);
 }
 
 TEST(NarrowPhaseStage, CompoundChildrenCollideLikeTheSameShapesAsSeparateBodies) {

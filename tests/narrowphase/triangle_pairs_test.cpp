@@ -180,11 +180,13 @@ TEST(TrianglePairs, SphereVertexRegionFollowsActiveFlags) {
     expectVecNear(m.normal, Vec3{0.3f, -0.1f, 0.3f} / len, 1e-6f);
     EXPECT_NEAR(m.points[0].depth, 0.5f - len, 1e-6f);
     EXPECT_EQ(m.points[0].feature, 4u);
-    // Edges 0 and 2 (the two at vertex 0) inactive: face normal, depth from the plane.
+    // Edges 0 and 2 (the two at vertex 0) inactive: face normal, depth from the plane, and the point under the
+    // centre (where the sphere touches the plane along that normal), not at the vertex: the solver's lever arm must
+    // run through the centre, or pushing turns the sphere.
     ASSERT_EQ(collideSphereTriangle(c, 0.5f, kFloor, 0b010, 0.0f, m), 1);
     expectVecNear(m.normal, {0, -1, 0}, 1e-6f);
     EXPECT_NEAR(m.points[0].depth, 0.4f, 1e-6f);
-    expectVecNear(m.points[0].position, {0, 0, 0}, 1e-6f);
+    expectVecNear(m.points[0].position, {-0.3f, 0, -0.3f}, 1e-6f);
     // Only one of them inactive: the vertex stays active.
     ASSERT_EQ(collideSphereTriangle(c, 0.5f, kFloor, 0b001, 0.0f, m), 1);
     EXPECT_GT(std::fabs(m.normal.x), 0.1f);
