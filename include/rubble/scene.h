@@ -47,8 +47,11 @@ enum class SceneFigure : std::uint8_t {
     /// Largest distance between a joint's two anchors (ball and hinge joints), or of a rod's anchors from its length
     /// (distance joints), after the last step, m. Springs stretch by design and are left out.
     JointStretch,
+    /// Highest a dynamic sphere's lowest point rose above the terrain surface under its centre after the run's first
+    /// second, m: a marble that hops over a mesh's edges shows it (other shapes are left out)
+    MaxHop,
 };
-inline constexpr int kSceneFigureCount = 8;
+inline constexpr int kSceneFigureCount = 9;
 /// The figure's name in scene files ("max_displacement", ...).
 std::string_view sceneFigureName(SceneFigure f);
 
@@ -76,7 +79,7 @@ void overrideSettings(Scene& scene, std::string_view settingsJson, const std::st
 
 /// Measures the scene's figures over a run: the runner prints them, the stability tests bound them. Construct it
 /// once the scene is instantiated (it takes the starts), call record() after every step, read results() at the end.
-/// record() costs a pass over the dynamic bodies only when a figure needs one (MaxSpeed, LateApex).
+/// record() costs a pass over the dynamic bodies only when a figure needs one (MaxSpeed, LateApex, MaxHop).
 class SceneFigureMeter {
 public:
     SceneFigureMeter(const Scene& scene, const World& world, const std::vector<BodyId>& bodies);
@@ -97,6 +100,8 @@ private:
     Vec3 staticMin_{0, 0, 0}, staticMax_{0, 0, 0};
     bool anyStatic_ = false;
     double maxSpeed_ = 0;
+    double maxHop_ = 0;
+    std::vector<std::pair<BodyId, float>> spheres_;  ///< MaxHop: dynamic spheres and their radii
     double time_ = 0;
     std::vector<std::pair<double, double>> apexes_;  ///< (time, highest centre) per step of the last 2 s
     /// JointStretch: per joint, its bodies, local anchors and rod length (0 for ball and hinge joints).

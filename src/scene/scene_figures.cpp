@@ -15,6 +15,10 @@ namespace {
 constexpr double kApexWindow = 2.0;
 /// Moved counts bodies that ended farther than this from their start, m.
 constexpr double kMovedDistance = 0.1;
+/// MaxHop starts watching after this long, s: bodies placed a little above the ground land first.
+constexpr double kHopSettling = 1.0;
+/// MaxHop measures the terrain's slope between heights this far apart, m.
+constexpr float kSlopeStep = 0.02f;
 
 bool wants(const std::vector<SceneFigure>& figures, SceneFigure f) {
     return std::find(figures.begin(), figures.end(), f) != figures.end();
@@ -46,6 +50,8 @@ std::string_view sceneFigureName(SceneFigure f) {
             return "late_apex";
         case SceneFigure::JointStretch:
             return "joint_stretch";
+        case SceneFigure::MaxHop:
+            return "max_hop";
     }
     return "unknown";
 }
@@ -67,6 +73,11 @@ SceneFigureMeter::SceneFigureMeter(const Scene& scene, const World& world, const
         dynamic_.push_back(id);
         starts_.push_back(world.centerOfMass(id));
     }
+    if (wants(figures_, SceneFigure::MaxHop))
+        for (std::size_t i = 0; i < bodies.size() && i < scene.bodies.size(); ++i)
+            if (const auto* sphere = std::get_if<SphereDef>(&scene.shapes[scene.bodies[i].shape]);
+                sphere && world.bodyType(bodies[i]) == BodyType::Dynamic)
+                spheres_.push_back({bodies[i], sphere->radius});
     if (!wants(figures_, SceneFigure::JointStretch)) return;
     for (const SceneJoint& j : scene.joints) {
         if (std::holds_alternative<SpringJointDef>(j.def) || j.bodyA >= bodies.size() || j.bodyB >= bodies.size())
@@ -81,6 +92,21 @@ SceneFigureMeter::SceneFigureMeter(const Scene& scene, const World& world, const
 
 void SceneFigureMeter::record(const World& world) {
     time_ += world.settings().timeStep;
+    if (time_ > kHopSettling)
+        for (const auto& [id, radius] : spheres_) {
+            // The gap along the surface's normal: on a slope a resting sphere's centre is radius / cos(slope) above
+            // the surface straight below it. The slope comes from the heights a few centimetres to each side.
+            const Vec3 c = world.centerOfMass(id);
+            float ground = 0, east = 0, west = 0, north = 0, south = 0;
+            if (!world.terrainHeightAt(c.x, c.z, ground) || !world.terrainHeightAt(c.x + kSlopeStep, c.z, east) ||
+                !world.terrainHeightAt(c.x - kSlopeStep, c.z, west) ||
+                !world.terrainHeightAt(c.x, c.z + kSlopeStep, north) ||
+                !world.terrainHeightAt(c.x, c.z - kSlopeStep, south))
+                continue;
+            const double gx = (east - west) / (2 * kSlopeStep), gz = (north - south) / (2 * kSlopeStep);
+            const double gap = (c.y - ground) / std::sqrt(1 + gx * gx + gz * gz) - radius;
+            maxHop_ = std::max(maxHop_, gap);
+        }
     const bool speed = wants(figures_, SceneFigure::MaxSpeed), apex = wants(figures_, SceneFigure::LateApex);
     if (!speed && !apex) return;
     double highest = -INFINITY;
@@ -168,6 +194,9 @@ std::vector<SceneFigureMeter::Result> SceneFigureMeter::results(const World& wor
                 out.push_back({f, largest, format("largest joint stretch: %.4f m", largest)});
                 break;
             }
+            case SceneFigure::MaxHop:
+                out.push_back({f, maxHop_, format("highest hop of a sphere over the terrain: %.4f m", maxHop_)});
+                break;
             case SceneFigure::LateApex: {
                 double highest = -INFINITY;
                 for (const auto& a : apexes_) highest = std::max(highest, a.second);
