@@ -18,6 +18,7 @@ enum BodyFlags : std::uint8_t {
     kFlagFrozen = 1u << 1,   ///< state went non-finite; no longer simulated
     kFlagAsleep = 1u << 2,   ///< resting in a sleeping island: the broad phase skips pairs of two such bodies
     kFlagNoSleep = 1u << 3,  ///< BodyDef::allowSleep was false: its island never sleeps
+    kFlagBullet = 1u << 4,   ///< BodyDef::bullet: continuous collision against dynamic bodies too
 };
 
 /// Dynamic and kinematic bodies. Position is the centre of mass; the user-facing origin is

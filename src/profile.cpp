@@ -14,6 +14,7 @@ std::string_view stageName(Stage s) {
         "islands",               //
         "solver",                //
         "integrate_positions",   //
+        "ccd",                   //
     };
     // A stage added to the enum without a name here fails the build instead of printing an empty name.
     static_assert(std::size(kNames) == kStageCount, "every stage needs a name");

@@ -223,8 +223,9 @@ BodyId World::createBody(const BodyDef& def) {
     m.filterCategory[i] = def.filter.category;
     m.filterMask[i] = def.filter.mask;
     m.userData[i] = def.userData;
-    m.flags[i] = static_cast<std::uint8_t>((kinematic ? detail::kFlagKinematic : 0) |
-                                           (def.allowSleep ? 0 : detail::kFlagNoSleep));
+    m.flags[i] =
+        static_cast<std::uint8_t>((kinematic ? detail::kFlagKinematic : 0) |
+                                  (def.allowSleep ? 0 : detail::kFlagNoSleep) | (def.bullet ? detail::kFlagBullet : 0));
     w.setMassFromShape(i);
     const Vec3 com = def.position + rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]});
     m.px[i] = com.x, m.py[i] = com.y, m.pz[i] = com.z;
@@ -591,6 +592,12 @@ void World::step(float dt) {
     bool collided = false;
     // Time in the joints' passes, summed over the threads that ran them (blocks run their joints in their tasks).
     std::atomic<detail::Clock::rep> jointNs{0};
+    // Continuous collision sweeps each fast body from where it starts the step to where the substeps leave it.
+    const bool continuous = w.effects.has(Effect::ContinuousCollision) && w.bodies.moving.size() > 0;
+    if (continuous) {
+        detail::StageTimer timer(profile, Stage::Ccd, w.origin);
+        w.ccd.begin(w.bodies.moving, *w.pool);
+    }
     const auto timeJoints = [&](auto&& work) {
         const auto jointBegin = detail::Clock::now();
         work();
@@ -723,6 +730,14 @@ void World::step(float dt) {
                 w.jointSolver.finish(w.joints);
             }
         }
+    }
+    if (continuous) {
+        detail::StageTimer timer(profile, Stage::Ccd, w.origin);
+        static const std::vector<detail::BodyPair> kNoPairs;
+        w.ccd.run(w.bodies, w.shapes, w.broadPhase.staticBvh(w.bodies, w.shapes, *w.pool),
+                  collided ? w.pairs.moving : kNoPairs, solver.linearSlop, *w.pool);
+        profile.ccdBodies = w.ccd.stats().fastBodies;
+        profile.ccdHits = w.ccd.stats().hits;
     }
     if (collided) {
         detail::StageTimer timer(profile, Stage::ContactCache, w.origin);

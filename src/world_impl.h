@@ -8,6 +8,7 @@
 #include "body_storage.h"
 #include "bounds.h"
 #include "broadphase/broadphase_stage.h"
+#include "ccd/ccd_stage.h"
 #include "contacts.h"
 #include "effects.h"
 #include "integrate.h"
@@ -80,6 +81,7 @@ struct World::Impl {
     /// where joints will add theirs.
     std::vector<detail::IslandEdge> islandEdges;
     detail::ContactSolver contactSolver;
+    detail::ContinuousCollision ccd;
     detail::JointStore joints;
     detail::JointSolver jointSolver;
     detail::JointCoupling jointCoupling;

@@ -38,6 +38,9 @@ struct BodyDef {
     /// May fall asleep with its island when the scene declares Effect::Sleeping. A body that may not keeps its
     /// whole island awake.
     bool allowSleep = true;
+    /// With Effect::ContinuousCollision: swept against dynamic bodies as well as static geometry (for projectiles;
+    /// every fast body is swept against static geometry). Costs a sweep against each body near its path.
+    bool bullet = false;
     std::uint64_t userData = 0;
 };
 

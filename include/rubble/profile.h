@@ -17,6 +17,7 @@ enum class Stage : std::uint8_t {
     Islands,
     Solver,
     IntegratePositions,
+    Ccd,  ///< continuous collision, only with Effect::ContinuousCollision
     Count,
 };
 inline constexpr int kStageCount = static_cast<int>(Stage::Count);
@@ -64,6 +65,8 @@ struct Profile {
     std::uint32_t islands = 0;         ///< islands of dynamic bodies (a body alone is an island), asleep included
     std::uint32_t largestIsland = 0;   ///< bodies in the largest island
     std::uint32_t sleepingBodies = 0;  ///< bodies asleep after the step
+    std::uint32_t ccdBodies = 0;       ///< fast bodies swept by continuous collision (Stage::Ccd)
+    std::uint32_t ccdHits = 0;         ///< of those, bodies moved back to their time of impact
 
     const StageTiming& operator[](Stage s) const { return stages[static_cast<int>(s)]; }
     StageTiming& operator[](Stage s) { return stages[static_cast<int>(s)]; }

@@ -440,7 +440,8 @@ void checkKeys(const Json& obj, const Loc& at, std::initializer_list<std::string
 /// Keys every generator accepts besides its own.
 constexpr std::string_view kGeneratorBodyKeys[] = {
     "type",     "shape",  "shapes",         "body_type",       "rotation",      "velocity",  "angular_velocity",
-    "material", "filter", "linear_damping", "angular_damping", "gravity_scale", "user_data", "allow_sleep"};
+    "material", "filter", "linear_damping", "angular_damping", "gravity_scale", "user_data", "allow_sleep",
+    "bullet"};
 
 void require(const Json& obj, const Loc& at, std::string_view key) {
     if (!obj.contains(key)) at.fail("missing required key '" + std::string(key) + "'");
@@ -944,6 +945,7 @@ void Builder::parseBodyFields(const Json& j, const Loc& at, std::string_view typ
     if (j.contains("gravity_scale")) def.gravityScale = getFloat(j["gravity_scale"], at / "gravity_scale");
     if (j.contains("user_data")) def.userData = getUint64(j["user_data"], at / "user_data");
     if (j.contains("allow_sleep")) def.allowSleep = getBool(j["allow_sleep"], at / "allow_sleep");
+    if (j.contains("bullet")) def.bullet = getBool(j["bullet"], at / "bullet");
 }
 
 void Builder::reserveBodies(double count, const Loc& at) const {
@@ -962,7 +964,7 @@ void Builder::parseBodies(const Json& j, const Loc& at) {
         const Json& o = expectObject(arr[i], b, "a body object");
         checkKeys(o, b,
                   {"shape", "type", "position", "rotation", "velocity", "angular_velocity", "material", "filter",
-                   "linear_damping", "angular_damping", "gravity_scale", "user_data", "allow_sleep"});
+                   "linear_damping", "angular_damping", "gravity_scale", "user_data", "allow_sleep", "bullet"});
         require(o, b, "shape");
         SceneBody body;
         body.shape = shapeRef(o["shape"], b / "shape");
