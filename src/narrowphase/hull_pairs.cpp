@@ -258,9 +258,14 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         float s, w;
         closestSegmentPoints(pa, da, pb, db, s, w);
         const Vec3 ca = pa + da * s, cb = pb + db * w;
-        const float depth = dot(ca - cb, axisE);
+        Vec3 normal = axisE;
+        float depth = dot(ca - cb, axisE);
+        // Apart, the edges' closest points are the contact: their distance can exceed the axis's separation when
+        // one of them is an edge's end (then the axis is not the direction between them), and the point on A must
+        // be `depth` along the normal from the point on B.
+        if (const float apart = length(cb - ca); depth < 0 && apart > 0) normal = (cb - ca) / apart, depth = -apart;
         if (depth < -margin) return false;
-        out.normal = ra * axisE;
+        out.normal = ra * normal;
         out.points[0].position = poseA.position + ra * cb;
         out.points[0].depth = depth;
         out.points[0].feature = (2u << 30) | ((static_cast<std::uint32_t>(edgeA) & 0x7FFFu) << 15) |
@@ -498,6 +503,36 @@ GjkResult segmentBoxDistance(const Vec3 seg[2], float radius, Vec3 h, float marg
 
 /// Capsule A against polytope B, in B's frame relative to its centre. `boxHalf` is set when B is a box: its exact
 /// segment-box distance replaces GJK.
+/// Where the line through `point` along unit `n` leaves the capsule (segment p0-p1 swept by `radius`) on its far side
+/// along n: the largest lambda with point + n lambda in the capsule, the capsule's surface point facing along n on
+/// that line. False when the line misses the capsule. Roots of the cylinder's quadratic (within the segment) and of
+/// both end spheres'.
+bool capsuleExitAlong(Vec3 p0, Vec3 p1, float radius, Vec3 point, Vec3 n, float& lambda) {
+    const Vec3 d = p1 - p0, m = point - p0;
+    const float dd = dot(d, d), r2 = radius * radius;
+    float best = -INFINITY;
+    const auto sphere = [&](Vec3 c) {
+        const Vec3 mc = point - c;
+        const float b = dot(mc, n), disc = b * b - (dot(mc, mc) - r2);
+        if (disc >= 0) best = maxf(best, -b + std::sqrt(disc));
+    };
+    sphere(p0);
+    sphere(p1);
+    if (dd > 0) {
+        const float nd = dot(n, d), md = dot(m, d);
+        const float a = 1.0f - nd * nd / dd, b = dot(m, n) - md * nd / dd, c = dot(m, m) - md * md / dd - r2;
+        const float disc = b * b - a * c;
+        if (a > 1e-12f && disc >= 0) {
+            const float lam = (-b + std::sqrt(disc)) / a;
+            const float t = (md + nd * lam) / dd;
+            if (t >= 0 && t <= 1) best = maxf(best, lam);
+        }
+    }
+    if (!(best > -INFINITY)) return false;
+    lambda = best;
+    return true;
+}
+
 bool collideCapsulePolytope(const CapsuleSegment& capsule, const HullView& H, const Transform& poseH, float margin,
                             Manifold& out, const Vec3* boxHalf = nullptr) {
     out.pointCount = 0;
@@ -598,6 +633,14 @@ bool collideCapsulePolytope(const CapsuleSegment& capsule, const HullView& H, co
                 count = 1;
             }
         }
+    }
+    // Each point on the polytope names its partner on the capsule, `depth` further along the normal: where the line
+    // along the normal through it leaves the capsule. A face's clipped segment gives depths measured from the segment
+    // point straight above the face, which name a point inside a tilted capsule, or one off a normal that is GJK's
+    // rather than the face's.
+    for (int k = 0; k < count; ++k) {
+        float lambda = 0;
+        if (capsuleExitAlong(seg[0], seg[1], radius, pts[k], normal, lambda)) depth[k] = lambda;
     }
     out.normal = rh * normal;
     for (int k = 0; k < count; ++k) {
