@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rubble/world.h"
+#include "support/test_shapes.h"
 
 namespace rubble {
 namespace {
@@ -108,20 +109,8 @@ TEST(ContinuousCollision, SpinningRodDoesNotTurnThroughAThinWall) {
 
 /// S3's terrain (SCENES.md): 100 x 100 cells over [-50, 50]^2, y = 2 sin(x / 8) cos(z / 8).
 TriangleMeshDef s3Terrain() {
-    TriangleMeshDef mesh;
-    const int n = 100;
-    for (int r = 0; r <= n; ++r)
-        for (int c = 0; c <= n; ++c) {
-            const float x = -50.0f + static_cast<float>(c), z = -50.0f + static_cast<float>(r);
-            mesh.vertices.push_back({x, 2.0f * std::sin(x / 8.0f) * std::cos(z / 8.0f), z});
-        }
-    const auto at = [&](int r, int c) { return static_cast<std::uint32_t>(r * (n + 1) + c); };
-    for (int r = 0; r < n; ++r)
-        for (int c = 0; c < n; ++c) {
-            mesh.indices.insert(mesh.indices.end(), {at(r, c), at(r + 1, c + 1), at(r, c + 1)});
-            mesh.indices.insert(mesh.indices.end(), {at(r, c), at(r + 1, c), at(r + 1, c + 1)});
-        }
-    return mesh;
+    return rubble::test::gridMesh(100, 100, -50, -50,
+                                  [](float x, float z) { return 2.0f * std::sin(x / 8.0f) * std::cos(z / 8.0f); });
 }
 
 /// Bodies whose centre is more than `depth` under the terrain (bodies beside it, which rolled off its edge, are not
@@ -221,16 +210,7 @@ TEST(ContinuousCollision, BulletIntoARowOfBoxesHitsTheFirstBox) {
 // travel per substep) is never stopped at an internal edge: it keeps its speed and covers 50 m a second.
 TEST(ContinuousCollision, FastSlideOverATessellatedFloorIsNeverStoppedAtAnEdge) {
     World world = makeWorld(true);
-    TriangleMeshDef floor;
-    const int n = 200;
-    for (int r = 0; r <= 4; ++r)
-        for (int c = 0; c <= n; ++c) floor.vertices.push_back({-100.0f + static_cast<float>(c), 0, -2.0f + r});
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < n; ++c) {
-            const auto at = [&](int rr, int cc) { return static_cast<std::uint32_t>(rr * (n + 1) + cc); };
-            floor.indices.insert(floor.indices.end(), {at(r, c), at(r + 1, c + 1), at(r, c + 1)});
-            floor.indices.insert(floor.indices.end(), {at(r, c), at(r + 1, c), at(r + 1, c + 1)});
-        }
+    const TriangleMeshDef floor = rubble::test::gridMesh(200, 4, -100, -2, [](float, float) { return 0.0f; });
     BodyDef ground;
     ground.type = BodyType::Static;
     ground.shape = world.createShape(floor);

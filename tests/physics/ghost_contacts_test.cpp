@@ -18,6 +18,7 @@
 
 #include "rubble/scene.h"
 #include "rubble/world.h"
+#include "support/test_shapes.h"
 
 namespace rubble {
 namespace {
@@ -52,24 +53,6 @@ using HeightFunction = float (*)(float x, float z);
 float flat(float, float) { return 0; }
 /// A gentle valley along x: 2 cm deep 1 m to either side (every row of edges along x concave).
 float trough(float, float z) { return 0.02f * z * z; }
-
-TriangleMeshDef gridMesh(HeightFunction height) {
-    TriangleMeshDef mesh;
-    const int n = 2 * kHalfCells;
-    for (int r = 0; r <= n; ++r)
-        for (int c = 0; c <= n; ++c) {
-            const float x = static_cast<float>(c - kHalfCells), z = static_cast<float>(r - kHalfCells);
-            mesh.vertices.push_back({x, height(x, z), z});
-        }
-    const auto at = [&](int r, int c) { return static_cast<std::uint32_t>(r * (n + 1) + c); };
-    for (int r = 0; r < n; ++r)
-        for (int c = 0; c < n; ++c) {
-            // Counter-clockwise seen from +y: (x0, z0), (x1, z1), (x1, z0) and (x0, z0), (x0, z1), (x1, z1).
-            mesh.indices.insert(mesh.indices.end(), {at(r, c), at(r + 1, c + 1), at(r, c + 1)});
-            mesh.indices.insert(mesh.indices.end(), {at(r, c), at(r + 1, c), at(r + 1, c + 1)});
-        }
-    return mesh;
-}
 
 HeightfieldDef gridHeightfield(HeightFunction height) {
     HeightfieldDef field;
@@ -112,7 +95,8 @@ Motion run(Ground ground, HeightFunction height, Mover mover, float speed, const
             floor.position = {0, -0.5f, 0};
             break;
         case Ground::Mesh:
-            floor.shape = world.createShape(gridMesh(height));
+            floor.shape = world.createShape(
+                rubble::test::gridMesh(2 * kHalfCells, 2 * kHalfCells, -kHalfCells, -kHalfCells, height));
             break;
         case Ground::Heightfield:
             floor.shape = world.createShape(gridHeightfield(height));

@@ -29,20 +29,29 @@ inline std::vector<Vec3> boxCorners(Vec3 h) {
     return corners;
 }
 
-/// A flat n x n grid of 1 m cells in the plane y = 0, centred at the origin, two triangles per cell.
-inline TriangleMeshDef flatGridMesh(int n) {
+/// A grid of 1 m cells, `columns` along x by `rows` along z from (x0, z0), each cell split into two triangles along
+/// its (x0, z0)-(x1, z1) diagonal, counter-clockwise seen from +y; vertex (x, z) at height(x, z).
+template <class Height>
+TriangleMeshDef gridMesh(int columns, int rows, float x0, float z0, Height&& height) {
     TriangleMeshDef grid;
-    const float half = static_cast<float>(n) / 2;
-    for (int r = 0; r <= n; ++r)
-        for (int c = 0; c <= n; ++c)
-            grid.vertices.push_back({static_cast<float>(c) - half, 0, static_cast<float>(r) - half});
-    const auto row = static_cast<std::uint32_t>(n + 1);
-    for (std::uint32_t r = 0; r < static_cast<std::uint32_t>(n); ++r)
-        for (std::uint32_t c = 0; c < static_cast<std::uint32_t>(n); ++c) {
+    for (int r = 0; r <= rows; ++r)
+        for (int c = 0; c <= columns; ++c) {
+            const float x = x0 + static_cast<float>(c), z = z0 + static_cast<float>(r);
+            grid.vertices.push_back({x, height(x, z), z});
+        }
+    const auto row = static_cast<std::uint32_t>(columns + 1);
+    for (std::uint32_t r = 0; r < static_cast<std::uint32_t>(rows); ++r)
+        for (std::uint32_t c = 0; c < static_cast<std::uint32_t>(columns); ++c) {
             const std::uint32_t a = r * row + c, b = a + 1, d = a + row, e = d + 1;
             grid.indices.insert(grid.indices.end(), {a, d, e, a, e, b});
         }
     return grid;
+}
+
+/// A flat n x n grid of 1 m cells in the plane y = 0, centred at the origin, two triangles per cell.
+inline TriangleMeshDef flatGridMesh(int n) {
+    const float half = static_cast<float>(n) / 2;
+    return gridMesh(n, n, -half, -half, [](float, float) { return 0.0f; });
 }
 
 }  // namespace rubble::test
