@@ -19,9 +19,9 @@ namespace {
 
 constexpr float kDt = 1.0f / 60.0f;
 
-World makeWorld(bool continuous, bool gravity = true) {
+World makeWorld(bool continuous, bool gravity = true, int threads = 1) {
     WorldSettings s;
-    s.threads = 1;
+    s.threads = threads;
     s.effects = EffectSet{}.with(Effect::Rotation).with(Effect::Friction);
     if (gravity) s.effects = s.effects.with(Effect::Gravity);
     if (continuous) s.effects = s.effects.with(Effect::ContinuousCollision);
@@ -233,6 +233,40 @@ TEST(ContinuousCollision, FastSlideOverATessellatedFloorIsNeverStoppedAtAnEdge) 
     }
     EXPECT_GT(slowest, 49.5f);
     EXPECT_NEAR(world.position(box).x, -90.0f + 100.0f, 0.5f);
+}
+
+// The stage's result does not depend on the thread count: bodies sweep in parallel, bullets after the rest.
+TEST(ContinuousCollision, StateIsTheSameForOneAndTwoThreads) {
+    const auto run = [](int threads) {
+        World world = makeWorld(true, true, threads);
+        addStatic(world,
+                  rubble::test::gridMesh(40, 40, -20, -20, [](float x, float z) { return 0.3f * std::sin(x + z); }),
+                  {});
+        addStatic(world, BoxDef{{0.01f, 2, 20}}, {3, 1, 0});
+        for (int k = 0; k < 300; ++k) {
+            const float x = -15.0f + 0.1f * static_cast<float>(k), z = -10.0f + 0.07f * static_cast<float>(k);
+            const ShapeDef shape = k % 3 == 0   ? ShapeDef{SphereDef{0.1f}}
+                                   : k % 3 == 1 ? ShapeDef{BoxDef{{0.3f, 0.02f, 0.1f}}}
+                                                : ShapeDef{CapsuleDef{0.05f, 0.2f}};
+            BodyDef def;
+            def.shape = world.createShape(shape);
+            def.position = {x, 3.0f + 0.01f * static_cast<float>(k), z};
+            def.linearVelocity = {60.0f * std::sin(0.3f * static_cast<float>(k)), -40, 0};
+            def.angularVelocity = {0, 0, 30};
+            def.bullet = k % 10 == 0;
+            world.createBody(def);
+        }
+        std::uint32_t hits = 0;
+        for (int step = 0; step < 40; ++step) {
+            world.step(kDt);
+            hits += world.lastProfile().ccdHits;
+        }
+        return std::pair{world.stateHash(), hits};
+    };
+    const auto one = run(1), two = run(2);
+    EXPECT_GT(one.second, 0u) << "some bodies were moved back";
+    EXPECT_EQ(one.first, two.first);
+    EXPECT_EQ(one.second, two.second);
 }
 
 }  // namespace
