@@ -10,14 +10,12 @@ namespace {
 /// the most, and stopping early leaves it short of the contact, never past it.
 constexpr int kMaxAdvances = 32;
 
-Quat multiply(Quat a, Quat b) { return a * b; }
-
 }  // namespace
 
 BodySweep::BodySweep(Vec3 c0, Quat q0, Vec3 c1, Quat q1, Vec3 localCenter)
     : c0_(c0), c1_(c1), localCenter_(localCenter), q0_(q0) {
     // q1 q0^-1 as an axis and an angle, on the short side of the double cover.
-    Quat d = multiply(q1, conjugate(q0));
+    Quat d = q1 * conjugate(q0);
     if (d.w < 0) d = {-d.x, -d.y, -d.z, -d.w};
     const float s = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
     angle_ = 2.0f * std::atan2(s, d.w);
@@ -25,7 +23,7 @@ BodySweep::BodySweep(Vec3 c0, Quat q0, Vec3 c1, Quat q1, Vec3 localCenter)
 }
 
 Transform BodySweep::at(float t) const {
-    const Quat q = angle_ > 0 ? multiply(Quat::fromAxisAngle(axis_, angle_ * t), q0_) : q0_;
+    const Quat q = angle_ > 0 ? Quat::fromAxisAngle(axis_, angle_ * t) * q0_ : q0_;
     const Vec3 c = c0_ + (c1_ - c0_) * t;
     return {c - rotate(q, localCenter_), q};
 }
@@ -58,12 +56,12 @@ TimeOfImpact timeOfImpact(const GjkShape& part, const BodySweep& sweep, float re
         if (!(closing > 0)) break;  // moving away along the separating direction: it cannot close
         t += (distance - gap) / closing;
         if (!(t < 1)) break;
-    }
-    if (out.iterations == kMaxAdvances && t < 1) {
-        // Out of advances short of the contact: stop there, which is safe.
-        out.state = TimeOfImpact::State::Hit;
-        out.t = t;
-        return out;
+        if (i + 1 == kMaxAdvances) {
+            // Out of advances short of the contact: stop there, which is safe.
+            out.state = TimeOfImpact::State::Hit;
+            out.t = t;
+            return out;
+        }
     }
     out.state = TimeOfImpact::State::Separated;
     out.t = 1;
