@@ -27,6 +27,15 @@
 #include <cstdint>
 #include <cstring>
 
+/// On a kernel: inline everything it calls, so that GCC keeps whole batches in registers. Under a sanitizer it is
+/// left out: instrumented, a flattened kernel takes GCC minutes to compile (integrate.cpp: 437 s under ASan+UBSan,
+/// most of CI's budget), for code whose speed a sanitized build does not measure.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define RUBBLE_FLATTEN
+#else
+#define RUBBLE_FLATTEN [[gnu::flatten]]
+#endif
+
 namespace rubble::simd {
 
 // ---------------------------------------------------------------------------------------------------------------

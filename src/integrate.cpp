@@ -272,8 +272,8 @@ VelocityResult<F> rk4Velocities(const VelocityInputs<F>& in, const Vec3W<F>& gra
 /// Returns the mask of lanes left unchanged because something became non-finite.
 // flatten: GCC otherwise keeps some of the small helpers out of line and passes whole batches through memory.
 template <class F, Integrator I>
-[[gnu::flatten]] MaskOf<F> velocityKernel(MovingBodies& b, const IntegrationParams& params, IntegrationScratch& s,
-                                          std::size_t i) {
+RUBBLE_FLATTEN MaskOf<F> velocityKernel(MovingBodies& b, const IntegrationParams& params, IntegrationScratch& s,
+                                        std::size_t i) {
     const VelocityInputs<F> in = loadVelocityInputs<F>(b, params.forces, i);
     const F dt(params.dt);
     const Vec3W<F> gravity = Vec3W<F>::broadcast(params.gravity.x, params.gravity.y, params.gravity.z);
@@ -312,8 +312,8 @@ template <class F, Integrator I>
 
 /// Moves the bodies [i, i + lanes); Offsets: add the scratch offsets to v and w; ExpMap: RK4's orientation update.
 template <class F, bool Offsets, bool ExpMap>
-[[gnu::flatten]] MaskOf<F> positionKernel(MovingBodies& b, const IntegrationParams& params, const IntegrationScratch& s,
-                                          std::size_t i) {
+RUBBLE_FLATTEN MaskOf<F> positionKernel(MovingBodies& b, const IntegrationParams& params, const IntegrationScratch& s,
+                                        std::size_t i) {
     const F dt(params.dt);
     const Vec3W<F> x0 = load3<F>(b.px, b.py, b.pz, i);
     Vec3W<F> v = load3<F>(b.vx, b.vy, b.vz, i);

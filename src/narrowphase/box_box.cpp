@@ -58,8 +58,8 @@ void toRotation(const QuatW<F>& q, F m[3][3]) {
 /// The 15-axis test, written once for a lane type: float runs one pair (and stops at the first separating group of
 /// axes), FloatW runs 16 pairs with selects where the scalar form branches, so both give the same bits.
 template <class F>
-[[gnu::flatten]] void boxSat(const Vec3W<F>& pa, const QuatW<F>& qa, const Vec3W<F>& halfA, const Vec3W<F>& pb,
-                             const QuatW<F>& qb, const Vec3W<F>& halfB, const F& margin, BoxSat<F>& s) {
+RUBBLE_FLATTEN void boxSat(const Vec3W<F>& pa, const QuatW<F>& qa, const Vec3W<F>& halfA, const Vec3W<F>& pb,
+                           const QuatW<F>& qb, const Vec3W<F>& halfB, const F& margin, BoxSat<F>& s) {
     using simd::abs;
     const F ha[3] = {halfA.x, halfA.y, halfA.z}, hb[3] = {halfB.x, halfB.y, halfB.z};
     // B in A's frame: r (columns = B's axes), t (B's centre). Only the centre difference is taken in world space.
@@ -199,8 +199,8 @@ F pick(const F& v0, const F& v1, const F& v2, const F& i) {
 /// The face contacts of the lanes (those whose SAT chose a face axis; other lanes compute unused values). In the
 /// reference box's frame: A's when !useB, else B's (A seen from B: transpose of r, centre -r^T t).
 template <class F>
-[[gnu::flatten]] void faceSlots(const BoxSat<F>& sat, const Vec3W<F>& halfA, const Vec3W<F>& halfB, const F& margin,
-                                FaceSlots<F>& out) {
+RUBBLE_FLATTEN void faceSlots(const BoxSat<F>& sat, const Vec3W<F>& halfA, const Vec3W<F>& halfB, const F& margin,
+                              FaceSlots<F>& out) {
     using simd::abs;
     using simd::select;
     const F zero(0.0f), one(1.0f);

@@ -321,7 +321,7 @@ void sphereBoxesAt(const SphereBoxPairs& in, std::size_t i, float margin, const 
 /// makes GCC's inliner give up on the kernels' helpers, and a wide kernel left as calls passes every Vec3W through
 /// the stack (sphere-sphere ran at half speed that way); both forms get the whole kernel inlined into their loop.
 template <auto wideAt, auto scalarAt, class Pairs>
-[[gnu::flatten]] void run(const Pairs& in, std::size_t n, float margin, const PairContacts& out, bool wide) {
+RUBBLE_FLATTEN void run(const Pairs& in, std::size_t n, float margin, const PairContacts& out, bool wide) {
     std::size_t i = 0;
     if (wide)
         for (const std::size_t end = simd::roundDownToLanes<FloatW>(n); i < end; i += simd::kLanes)

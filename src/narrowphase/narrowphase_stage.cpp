@@ -409,9 +409,9 @@ enum class SideSource { Moving, Static, Mixed };
 /// Side `sideB` of the pairs jobs[0 .. kLanes) (jobs of `chunk`), gathered into lanes. Whole moving bodies: the shape
 /// origin from the centre of mass (com - R lc, as posed() computes it), except that a sphere is at its centre of
 /// mass (as sphereCenter() has it).
-[[gnu::flatten]] SideLanes gatherSide(const NarrowPhaseStage::Chunk& chunk, const std::uint32_t* jobs, bool sideB,
-                                      SideForm form, const BodyStorage& storage, const MovingRows& rows,
-                                      const std::vector<Shape>& shapes, const ShapeTables& tables) {
+RUBBLE_FLATTEN SideLanes gatherSide(const NarrowPhaseStage::Chunk& chunk, const std::uint32_t* jobs, bool sideB,
+                                    SideForm form, const BodyStorage& storage, const MovingRows& rows,
+                                    const std::vector<Shape>& shapes, const ShapeTables& tables) {
     using simd::IntW;
     alignas(64) std::int32_t body[simd::kLanes], shape[simd::kLanes];
     bool allMoving = true, allStatic = true, oneShape = true;
