@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs, from Debian's packages, whatever Rubble needs that this machine lacks. Safe to run again.
 set -euo pipefail
-packages=(cmake ninja-build g++ ccache clang-format
+packages=(cmake ninja-build g++ ccache clang-format pkg-config
           libtbb-dev libxsimd-dev libeigen3-dev libqhull-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev
           libccd-dev   # libccd: an independent collision library, used only by tests as an oracle
           # The viewer: GLFW windows, libepoxy as the OpenGL loader, Dear ImGui (its static library carries the
