@@ -110,9 +110,41 @@ ShapeBoundsInfo shapeBoundsInfo(const Shape& shape) {
     }
     // Rounding in the kernel's rotation must not shrink a box below the shape: pad by a few ulps of the size.
     const float pad = 4e-7f * (length(half) + length(relative));
-    return {relative.x,   relative.y,   relative.z,   half.x + pad,
-            half.y + pad, half.z + pad, radius + pad, rotationReach(shape)};
+    return {relative.x,   relative.y,   relative.z,           half.x + pad,      half.y + pad,
+            half.z + pad, radius + pad, rotationReach(shape), innerExtent(shape)};
 }
+
+namespace {
+
+float innerExtentAbout(const Shape& s, Vec3 center) {
+    switch (s.kind) {
+        case ShapeKind::Sphere:
+        case ShapeKind::Capsule:
+            return s.radius;
+        case ShapeKind::Box:
+            return std::min({s.halfExtents.x, s.halfExtents.y, s.halfExtents.z});
+        case ShapeKind::ConvexHull: {
+            float inner = INFINITY;
+            for (std::uint32_t f = 0; f < s.hull->faceCount(); ++f)
+                inner = std::min(inner, s.hull->faceOffsets[f] - dot(s.hull->faceNormals[f], center));
+            return std::max(inner, 0.0f);
+        }
+        case ShapeKind::Compound: {
+            float inner = INFINITY;
+            for (const CompoundChild& c : s.children)
+                inner = std::min(inner, innerExtentAbout(*c.shape, applyInverse(c.local, center)));
+            return inner;
+        }
+        case ShapeKind::TriangleMesh:
+        case ShapeKind::Heightfield:
+            break;
+    }
+    return 0.0f;
+}
+
+}  // namespace
+
+float innerExtent(const Shape& shape) { return innerExtentAbout(shape, shape.unitMass.centerOfMass); }
 
 float rotationReach(const Shape& shape) {
     const Vec3 com = shape.unitMass.centerOfMass;
@@ -137,11 +169,13 @@ float rotationReach(const Shape& shape) {
 
 void ShapeBoundsTable::set(std::uint32_t shape, const ShapeBoundsInfo& info) {
     if (shape >= centerX.size())
-        for (auto* a : {&centerX, &centerY, &centerZ, &halfX, &halfY, &halfZ, &radius, &reach}) a->resize(shape + 1);
+        for (auto* a : {&centerX, &centerY, &centerZ, &halfX, &halfY, &halfZ, &radius, &reach, &inner})
+            a->resize(shape + 1);
     centerX[shape] = info.centerX, centerY[shape] = info.centerY, centerZ[shape] = info.centerZ;
     halfX[shape] = info.halfX, halfY[shape] = info.halfY, halfZ[shape] = info.halfZ;
     radius[shape] = info.radius;
     reach[shape] = info.reach;
+    inner[shape] = info.inner;
 }
 
 void updateBounds(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,

@@ -22,6 +22,7 @@ struct ShapeBoundsInfo {
     float halfX = 0, halfY = 0, halfZ = 0;
     float radius = 0;
     float reach = 0;  ///< rotationReach of the shape
+    float inner = 0;  ///< innerExtent of the shape
 };
 
 /// Bounds data of a shape (static-only shapes get their local box; they never move).
@@ -33,9 +34,13 @@ ShapeBoundsInfo shapeBoundsInfo(const Shape& shape);
 /// compounds stand in for their points. 0 for static-only shapes.
 float rotationReach(const Shape& shape);
 
+/// Smallest distance from the centre of mass to the shape's surface (a bound from below): how far the shape can move
+/// before it could have passed wholly through something thin. 0 for static-only shapes.
+float innerExtent(const Shape& shape);
+
 /// Per-shape tables in SoA form, indexed by shape slot, for SIMD gathers.
 struct ShapeBoundsTable {
-    std::vector<float> centerX, centerY, centerZ, halfX, halfY, halfZ, radius, reach;
+    std::vector<float> centerX, centerY, centerZ, halfX, halfY, halfZ, radius, reach, inner;
     void set(std::uint32_t shape, const ShapeBoundsInfo& info);
 };
 

@@ -734,7 +734,7 @@ void World::step(float dt) {
     if (continuous) {
         detail::StageTimer timer(profile, Stage::Ccd, w.origin);
         static const std::vector<detail::BodyPair> kNoPairs;
-        w.ccd.run(w.bodies, w.shapes, w.broadPhase.staticBvh(w.bodies, w.shapes, *w.pool),
+        w.ccd.run(w.bodies, w.shapes, w.shapeBounds, w.broadPhase.staticBvh(w.bodies, w.shapes, *w.pool),
                   collided ? w.pairs.moving : kNoPairs, solver.linearSlop, *w.pool);
         profile.ccdBodies = w.ccd.stats().fastBodies;
         profile.ccdHits = w.ccd.stats().hits;

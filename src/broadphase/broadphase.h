@@ -44,6 +44,11 @@ struct MeshPair {
     std::uint32_t triangleCount = 0;
 };
 
+/// Whether two bodies may touch: each one's category in the other's mask.
+inline bool filtersAccept(std::uint32_t categoryA, std::uint32_t maskA, std::uint32_t categoryB, std::uint32_t maskB) {
+    return (categoryA & maskB) != 0 && (categoryB & maskA) != 0;
+}
+
 /// Which pairs may become contacts: each body's category must be in the other's mask, and a pair of two sleeping
 /// bodies is skipped (a static body counts as sleeping). Null arrays mean "everything collides, nobody sleeps".
 struct PairFilter {
@@ -54,7 +59,7 @@ struct PairFilter {
 
     bool asleep(std::uint32_t i) const { return flags != nullptr && (flags[i] & asleepBit) != 0; }
     bool accepts(std::uint32_t a, std::uint32_t b) const {
-        if (category != nullptr && ((category[a] & mask[b]) == 0 || (category[b] & mask[a]) == 0)) return false;
+        if (category != nullptr && !filtersAccept(category[a], mask[a], category[b], mask[b])) return false;
         return !(asleep(a) && asleep(b));
     }
 };

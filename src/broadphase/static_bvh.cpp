@@ -513,7 +513,7 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
                 while (runEnd < hits.size() && std::uint32_t(hits[runEnd] >> 32) == body) ++runEnd;
                 const std::uint32_t staticCategory = filter.staticCategory ? filter.staticCategory[body] : ~0u;
                 const std::uint32_t staticMask = filter.staticMask ? filter.staticMask[body] : ~0u;
-                if ((category & staticMask) != 0 && (staticCategory & mask) != 0) {
+                if (filtersAccept(category, mask, staticCategory, staticMask)) {
                     // kWholeBody (~0u) sorts after every triangle of the same body.
                     std::size_t triangleEnd = runEnd;
                     if (std::uint32_t(hits[runEnd - 1]) == kWholeBody) {

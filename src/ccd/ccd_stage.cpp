@@ -24,41 +24,12 @@ Transform movingPose(const MovingBodies& m, std::uint32_t i) {
     return {Vec3{m.px[i], m.py[i], m.pz[i]} - rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]}), q};
 }
 
-/// Smallest distance from the centre of mass `center` (shape frame) to the shape's surface, a bound from below.
-float innerExtent(const Shape& s, Vec3 center) {
-    switch (s.kind) {
-        case ShapeKind::Sphere:
-        case ShapeKind::Capsule:
-            return s.radius;
-        case ShapeKind::Box:
-            return std::min({s.halfExtents.x, s.halfExtents.y, s.halfExtents.z});
-        case ShapeKind::ConvexHull: {
-            float inner = INFINITY;
-            for (std::uint32_t f = 0; f < s.hull->faceCount(); ++f)
-                inner = std::min(inner, s.hull->faceOffsets[f] - dot(s.hull->faceNormals[f], center));
-            return std::max(inner, 0.0f);
-        }
-        case ShapeKind::Compound: {
-            float inner = INFINITY;
-            for (const CompoundChild& c : s.children)
-                inner = std::min(inner, innerExtent(*c.shape, applyInverse(c.local, center)));
-            return inner;
-        }
-        default:
-            return 0;
-    }
-}
-
 /// The convex parts of a shape at `pose`: the shape itself, or each child of a compound.
 template <class Emit>
 void forEachPart(const Shape& s, const Transform& pose, Emit&& emit) {
     if (s.kind != ShapeKind::Compound) return emit(gjkShapeOf(s, pose));
     for (const CompoundChild& c : s.children)
         emit(gjkShapeOf(*c.shape, {apply(pose, c.local.position), pose.rotation * c.local.rotation}));
-}
-
-bool filtersMeet(std::uint32_t categoryA, std::uint32_t maskA, std::uint32_t categoryB, std::uint32_t maskB) {
-    return (categoryA & maskB) != 0 && (categoryB & maskA) != 0;
 }
 
 }  // namespace
@@ -77,8 +48,9 @@ void ContinuousCollision::begin(const MovingBodies& m, TaskPool& pool) {
     });
 }
 
-void ContinuousCollision::run(BodyStorage& storage, const std::vector<Shape>& shapes, const StaticBvh& staticTree,
-                              const std::vector<BodyPair>& movingPairs, float linearSlop, TaskPool& pool) {
+void ContinuousCollision::run(BodyStorage& storage, const std::vector<Shape>& shapes, const ShapeBoundsTable& extents,
+                              const StaticBvh& staticTree, const std::vector<BodyPair>& movingPairs, float linearSlop,
+                              TaskPool& pool) {
     MovingBodies& m = storage.moving;
     const std::uint32_t n = std::min<std::uint32_t>(m.size(), static_cast<std::uint32_t>(px_.size()));
     // Which bodies are fast: one pass, flags per body, then the lists in body order.
@@ -89,11 +61,10 @@ void ContinuousCollision::run(BodyStorage& storage, const std::vector<Shape>& sh
             const BodySweep sweep({px_[i], py_[i], pz_[i]}, {qx_[i], qy_[i], qz_[i], qw_[i]},
                                   {m.px[i], m.py[i], m.pz[i]}, {m.qx[i], m.qy[i], m.qz[i], m.qw[i]},
                                   {m.lcx[i], m.lcy[i], m.lcz[i]});
-            const Shape& s = shapes[m.shape[i]];
-            const float motion = length(sweep.translation()) + sweep.angle() * rotationReach(s);
+            const std::uint32_t s = m.shape[i];
+            const float motion = length(sweep.translation()) + sweep.angle() * extents.reach[s];
             const bool bullet = (m.flags[i] & kFlagBullet) != 0;
-            if (motion > 0 && motion >= kFastFraction * innerExtent(s, {m.lcx[i], m.lcy[i], m.lcz[i]}))
-                hit_[i] = bullet ? 2 : 1;
+            if (motion > 0 && motion >= kFastFraction * extents.inner[s]) hit_[i] = bullet ? 2 : 1;
         }
     });
     fast_.clear();
@@ -108,9 +79,10 @@ void ContinuousCollision::run(BodyStorage& storage, const std::vector<Shape>& sh
     if (stats_.fastBodies == 0) return;
 
     std::fill(hit_.begin(), hit_.end(), std::uint8_t{0});
+    const Sweeps sweeps{shapes, extents, staticTree,
+                        std::max(treeScale(staticTree.mainTree()), treeScale(staticTree.secondaryTree())), linearSlop};
     pool.forChunks(fast_.size(), kSweepChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-        for (std::size_t k = begin; k < end; ++k)
-            hit_[fast_[k]] = sweepBody(fast_[k], storage, shapes, staticTree, nullptr, linearSlop);
+        for (std::size_t k = begin; k < end; ++k) hit_[fast_[k]] = sweepBody(fast_[k], storage, sweeps, nullptr);
     });
     if (!bullets_.empty()) {
         // A bullet's dynamic targets: the other non-bullet bodies of its candidate pairs.
@@ -125,25 +97,27 @@ void ContinuousCollision::run(BodyStorage& storage, const std::vector<Shape>& sh
             }
         pool.forChunks(bullets_.size(), kSweepChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
             for (std::size_t k = begin; k < end; ++k)
-                hit_[bullets_[k]] = sweepBody(bullets_[k], storage, shapes, staticTree, &bulletTargets_[k], linearSlop);
+                hit_[bullets_[k]] = sweepBody(bullets_[k], storage, sweeps, &bulletTargets_[k]);
         });
     }
     for (const std::uint8_t h : hit_) stats_.hits += h;
 }
 
-bool ContinuousCollision::sweepBody(std::uint32_t i, BodyStorage& storage, const std::vector<Shape>& shapes,
-                                    const StaticBvh& staticTree, const std::vector<std::uint32_t>* dynamicTargets,
-                                    float linearSlop) {
+bool ContinuousCollision::sweepBody(std::uint32_t i, BodyStorage& storage, const Sweeps& sweeps,
+                                    const std::vector<std::uint32_t>* dynamicTargets) {
+    const std::vector<Shape>& shapes = sweeps.shapes;
+    const float linearSlop = sweeps.linearSlop;
     MovingBodies& m = storage.moving;
     const StaticBodies& st = storage.statics;
     const Vec3 c0{px_[i], py_[i], pz_[i]}, c1{m.px[i], m.py[i], m.pz[i]};
     const BodySweep sweep(c0, {qx_[i], qy_[i], qz_[i], qw_[i]}, c1, {m.qx[i], m.qy[i], m.qz[i], m.qw[i]},
                           {m.lcx[i], m.lcy[i], m.lcz[i]});
     const Shape& shape = shapes[m.shape[i]];
-    const float reach = rotationReach(shape);
-    const ShapeBoundsInfo bounds = shapeBoundsInfo(shape);
+    const ShapeBoundsTable& t = sweeps.extents;
+    const std::uint32_t s = m.shape[i];
+    const float reach = t.reach[s];
     // Everything the body covers during the step lies within this distance of its centre of mass's path.
-    const float extent = length(Vec3{bounds.centerX, bounds.centerY, bounds.centerZ}) + bounds.radius + linearSlop;
+    const float extent = length(Vec3{t.centerX[s], t.centerY[s], t.centerZ[s]}) + t.radius[s] + linearSlop;
     const Vec3 lo =
         Vec3{std::min(c0.x, c1.x), std::min(c0.y, c1.y), std::min(c0.z, c1.z)} - Vec3{extent, extent, extent};
     const Vec3 hi =
@@ -160,22 +134,17 @@ bool ContinuousCollision::sweepBody(std::uint32_t i, BodyStorage& storage, const
     const std::uint32_t category = m.filterCategory[i], mask = m.filterMask[i];
     const auto& slots = storage.slots();
     const auto visit = [&](const StaticBvh::PrimitiveRef& ref) {
-        const std::uint32_t s = slots[ref.body].dense;
-        if (!filtersMeet(category, mask, st.filterCategory[s], st.filterMask[s])) return;
-        const Shape& target = shapes[st.shape[s]];
-        const Transform pose{{st.px[s], st.py[s], st.pz[s]}, {st.qx[s], st.qy[s], st.qz[s], st.qw[s]}};
+        const std::uint32_t d = slots[ref.body].dense;
+        if (!filtersAccept(category, mask, st.filterCategory[d], st.filterMask[d])) return;
+        const Shape& target = shapes[st.shape[d]];
+        const Transform pose{{st.px[d], st.py[d], st.pz[d]}, {st.qx[d], st.qy[d], st.qz[d], st.qw[d]}};
         if (ref.triangle == kWholeBody) {
             forEachPart(target, pose, sweepAgainst);
             return;
         }
+        const std::array<Vec3, 3> local = triangleOf(target, ref.triangle);
         Vec3 v[3];
-        if (target.mesh) {
-            const std::uint32_t* index = &target.mesh->indices[3 * std::size_t(ref.triangle)];
-            for (int k = 0; k < 3; ++k) v[k] = apply(pose, target.mesh->vertices[index[k]]);
-        } else {
-            const std::array<Vec3, 3> local = heightfieldTriangle(*target.heightfield, ref.triangle);
-            for (int k = 0; k < 3; ++k) v[k] = apply(pose, local[k]);
-        }
+        for (int k = 0; k < 3; ++k) v[k] = apply(pose, local[k]);
         // Only a body whose centre of mass crossed the triangle's plane went into or through it; one that slid
         // along a floor meets the next triangle's edge without having to stop there.
         const Vec3 normal = cross(v[1] - v[0], v[2] - v[0]);
@@ -189,13 +158,13 @@ bool ContinuousCollision::sweepBody(std::uint32_t i, BodyStorage& storage, const
     };
     const float pad = boxPad(std::max({std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x),
                                        std::fabs(hi.y), std::fabs(hi.z)}) +
-                             treeScale(staticTree.mainTree()));
+                             sweeps.treeScale);
     const Vec3 grow{pad, pad, pad};
-    overlapTree(staticTree.mainTree(), lo - grow, hi + grow, visit);
-    overlapTree(staticTree.secondaryTree(), lo - grow, hi + grow, visit);
+    overlapTree(sweeps.staticTree.mainTree(), lo - grow, hi + grow, visit);
+    overlapTree(sweeps.staticTree.secondaryTree(), lo - grow, hi + grow, visit);
     if (dynamicTargets)
         for (const std::uint32_t j : *dynamicTargets) {
-            if (!filtersMeet(category, mask, m.filterCategory[j], m.filterMask[j])) continue;
+            if (!filtersAccept(category, mask, m.filterCategory[j], m.filterMask[j])) continue;
             forEachPart(shapes[m.shape[j]], movingPose(m, j), sweepAgainst);
         }
     if (!(first < 1)) return false;

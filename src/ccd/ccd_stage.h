@@ -25,6 +25,7 @@ namespace rubble::detail {
 class StaticBvh;
 class TaskPool;
 struct BodyPair;
+struct ShapeBoundsTable;
 
 struct CcdStats {
     std::uint32_t fastBodies = 0;  ///< bodies swept
@@ -35,16 +36,24 @@ class ContinuousCollision {
 public:
     /// Before the step's substeps: keeps the poses the sweeps start from.
     void begin(const MovingBodies& bodies, TaskPool& pool);
-    /// After the step's last substep. `movingPairs`: this step's candidate pairs of moving bodies (bullets find
-    /// their dynamic targets among them).
-    void run(BodyStorage& storage, const std::vector<Shape>& shapes, const StaticBvh& staticTree,
-             const std::vector<BodyPair>& movingPairs, float linearSlop, TaskPool& pool);
+    /// After the step's last substep. `extents`: the shapes' reach and inner extent (bounds.h). `movingPairs`: this
+    /// step's candidate pairs of moving bodies (bullets find their dynamic targets among them).
+    void run(BodyStorage& storage, const std::vector<Shape>& shapes, const ShapeBoundsTable& extents,
+             const StaticBvh& staticTree, const std::vector<BodyPair>& movingPairs, float linearSlop, TaskPool& pool);
     const CcdStats& stats() const { return stats_; }
 
 private:
+    /// What every sweep of a run reads.
+    struct Sweeps {
+        const std::vector<Shape>& shapes;
+        const ShapeBoundsTable& extents;
+        const StaticBvh& staticTree;
+        float treeScale;  ///< of both static trees, for the query box's pad
+        float linearSlop;
+    };
     /// One fast body's sweep; returns true when it moved back.
-    bool sweepBody(std::uint32_t body, BodyStorage& storage, const std::vector<Shape>& shapes,
-                   const StaticBvh& staticTree, const std::vector<std::uint32_t>* dynamicTargets, float linearSlop);
+    bool sweepBody(std::uint32_t body, BodyStorage& storage, const Sweeps& sweeps,
+                   const std::vector<std::uint32_t>* dynamicTargets);
 
     AlignedVector<float> px_, py_, pz_, qx_, qy_, qz_, qw_;  ///< poses at the start of the step
     std::vector<std::uint32_t> fast_, bullets_;

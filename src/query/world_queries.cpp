@@ -119,14 +119,6 @@ private:
     Candidate last_;
 };
 
-/// The three vertices of a mesh or heightfield triangle, in the shape's frame.
-std::array<Vec3, 3> triangleOf(const detail::Shape& shape, std::uint32_t triangle) {
-    if (shape.kind == ShapeKind::Heightfield) return detail::heightfieldTriangle(*shape.heightfield, triangle);
-    const detail::TriangleMesh& mesh = *shape.mesh;
-    const std::uint32_t* idx = &mesh.indices[3 * std::size_t(triangle)];
-    return {mesh.vertices[idx[0]], mesh.vertices[idx[1]], mesh.vertices[idx[2]]};
-}
-
 Transform compose(const Transform& outer, const Transform& inner) {
     return {apply(outer, inner.position), outer.rotation * inner.rotation};
 }
@@ -332,7 +324,7 @@ std::optional<ShapeCastHit> castParts(World::Impl& w, const std::vector<Part>& p
     };
     sweepWorld(w, trees, filter, box.min, box.max, dir, maxT, [&](const Candidate& c, std::uint32_t triangle) {
         if (triangle != detail::kWholeBody) {
-            const std::array<Vec3, 3> t = triangleOf(*c.shape, triangle);
+            const std::array<Vec3, 3> t = detail::triangleOf(*c.shape, triangle);
             const Vec3 tri[3] = {t[0], t[1], t[2]};
             for (const Part& q : parts) {
                 SweepHit h;
@@ -360,7 +352,7 @@ std::size_t overlapParts(World::Impl& w, const std::vector<Part>& parts, std::ve
         if (!found.empty() && found.back() == c.id) return;  // another triangle of a mesh already in
         bool touches = false;
         if (triangle != detail::kWholeBody) {
-            const std::array<Vec3, 3> t = triangleOf(*c.shape, triangle);
+            const std::array<Vec3, 3> t = detail::triangleOf(*c.shape, triangle);
             const Vec3 tri[3] = {t[0], t[1], t[2]};
             for (const Part& q : parts) touches = touches || overlapPartTriangle(q, tri, c.pose);
         } else {
@@ -401,7 +393,7 @@ std::optional<RayHit> World::castRay(Vec3 origin, Vec3 direction, float maxDista
                     [&](float t, Vec3 n, std::uint32_t child) { consider(c, t, n, child, kNoIndex); });
             return;
         }
-        const std::array<Vec3, 3> tri = triangleOf(*c.shape, triangle);
+        const std::array<Vec3, 3> tri = detail::triangleOf(*c.shape, triangle);
         SurfaceHit h;
         if (detail::rayTriangle(detail::toLocal(c.pose, ray), tri[0], tri[1], tri[2], filter.hitBackFaces, h))
             consider(c, h.t, rotate(c.pose.rotation, h.normal), kNoIndex, triangle);
@@ -426,7 +418,7 @@ std::size_t World::castRayAll(Vec3 origin, Vec3 direction, float maxDistance, st
             });
             return;
         }
-        const std::array<Vec3, 3> tri = triangleOf(*c.shape, triangle);
+        const std::array<Vec3, 3> tri = detail::triangleOf(*c.shape, triangle);
         SurfaceHit h;
         if (detail::rayTriangle(detail::toLocal(c.pose, ray), tri[0], tri[1], tri[2], filter.hitBackFaces, h))
             hits.push_back({c.id, origin + dir * h.t, rotate(c.pose.rotation, h.normal), h.t, triangle, kNoIndex});

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "broadphase/static_bvh.h"
 #include "rubble/error.h"
 #include "shapes/mesh_adjacency.h"
 
@@ -202,6 +203,12 @@ Shape buildShape(const ShapeDef& def) {
     s.unitMass = unitMassProperties(s);
     if (!s.staticOnly()) s.unitPrincipal = principalAxes(s.unitMass.inertia);
     return s;
+}
+
+std::array<Vec3, 3> triangleOf(const Shape& shape, std::uint32_t t) {
+    if (shape.kind == ShapeKind::Heightfield) return heightfieldTriangle(*shape.heightfield, t);
+    const std::uint32_t* index = &shape.mesh->indices[3 * std::size_t(t)];
+    return {shape.mesh->vertices[index[0]], shape.mesh->vertices[index[1]], shape.mesh->vertices[index[2]]};
 }
 
 std::optional<float> surfaceHeightAt(const Shape& shape, float x, float z) {

@@ -1,6 +1,7 @@
 #pragma once
 // Built shapes as the engine keeps them. A Shape is made from a public ShapeDef by buildShape, which validates the
 // definition, computes hulls and unit-density mass properties once, so that body creation is cheap.
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -88,6 +89,9 @@ Shape buildShape(const ShapeDef& def);
 MassProperties scaleMass(const MassProperties& unit, float density);
 
 PrincipalInertia principalAxes(const Mat3& inertia);
+
+/// The three vertices of triangle t of a triangle mesh or heightfield, in the shape's frame.
+std::array<Vec3, 3> triangleOf(const Shape& shape, std::uint32_t t);
 
 /// Height (local y) of the highest surface of a triangle mesh or heightfield at local (x, z); empty when
 /// (x, z) is outside the shape or the shape has no surface there.
