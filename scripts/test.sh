@@ -14,7 +14,23 @@ perf=ON; [[ -n $sanitize ]] && perf=OFF
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=$type -DRUBBLE_WERROR=ON -DRUBBLE_SANITIZE="$sanitize" \
     -DRUBBLE_BUILD_PERF=$perf >/dev/null
 cmake --build "$build"
-ctest --test-dir "$build" --output-on-failure -j "$(nproc)"
+if [[ -d $build/lib/glibc-hwcaps ]]; then
+  # A dispatch build (one core per x86-64 level): the suite once per level this CPU runs, the loader's own choice
+  # first, the others by hiding from it (and from the core's check) the features of the levels above.
+  levels=$(/lib64/ld-linux-x86-64.so.2 --help | grep -oE 'x86-64-v[234] \(supported' | cut -d' ' -f1)
+  for level in $levels; do
+    case $level in
+      x86-64-v4) hide= ;;
+      x86-64-v3) hide=glibc.cpu.hwcaps=-AVX512F ;;
+      x86-64-v2) hide=glibc.cpu.hwcaps=-AVX2,-AVX512F ;;
+    esac
+    echo "== the suite on the core built for $level"
+    env RUBBLE_EXPECT_CORE_BUILD="$level" ${hide:+GLIBC_TUNABLES=$hide} \
+      ctest --test-dir "$build" --output-on-failure -j "$(nproc)"
+  done
+else
+  ctest --test-dir "$build" --output-on-failure -j "$(nproc)"
+fi
 # The installed package, used from outside the tree: CMake (examples/consumer) and pkg-config.
 if [[ -z $sanitize ]]; then
   consumer=$(mktemp -d)
@@ -25,6 +41,7 @@ if [[ -z $sanitize ]]; then
   "$consumer/build/drop_box"
   export PKG_CONFIG_PATH="$consumer/prefix/lib/pkgconfig"
   # shellcheck disable=SC2046  # pkg-config's flags are words
-  c++ -std=c++20 examples/consumer/drop_box.cpp -o "$consumer/drop_box_pc" $(pkg-config --cflags --libs rubble)
+  c++ -std=c++20 examples/consumer/drop_box.cpp -o "$consumer/drop_box_pc" $(pkg-config --cflags --libs rubble) \
+    -Wl,-rpath,"$consumer/prefix/lib"
   "$consumer/drop_box_pc"
 fi

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "cpu_check.h"
 #include "rubble/error.h"
 #include "simd/float_mode.h"
 #include "world_impl.h"
@@ -106,6 +107,8 @@ std::uint64_t bitsOf(float f) {
 }  // namespace
 
 World::World(const WorldSettings& settings) {
+    // Also what links the check into a static core (its load-time twin lives in the same file).
+    detail::requireCpuFeatures();
     if (settings.threads < 0)
         fail("World", "settings.threads must be >= 0 (got " + std::to_string(settings.threads) + ")");
     impl_ = std::make_unique<Impl>(settings);

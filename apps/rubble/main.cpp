@@ -266,8 +266,9 @@ int run(const Options& options) {
                 scene.settings.velocityIterations, scene.settings.positionIterations,
                 solver.warmStarting ? "on" : "off", solver.warmStarting && solver.seedRestingLoads ? "on" : "off",
                 solver.shockPropagation ? "on" : "off");
-    std::printf("threads    %d%s, SIMD %s (%d float lanes)\n", scene.settings.threads,
-                scene.settings.threads == 0 ? " (all cores)" : "", build.instructionSet, build.floatLanes);
+    std::printf("threads    %d%s, SIMD %s (%d float lanes, core built for %s)\n", scene.settings.threads,
+                scene.settings.threads == 0 ? " (all cores)" : "", build.instructionSet, build.floatLanes,
+                build.coreBuild);
     std::printf("broad      %s (setting)\n", std::string(rubble::broadPhaseName(scene.settings.broadPhase)).c_str());
     std::printf("effects    declared: %s\n           simulated: %s\n", effectList(scene.settings.effects).c_str(),
                 effectList(world.activeEffects()).c_str());
