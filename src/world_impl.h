@@ -1,6 +1,6 @@
 #pragma once
 // World::Impl: the state behind the public World, shared by the files that implement World's API (world.cpp for
-// bodies and the step, query/ for the queries), and the validation helpers they use at the API boundary.
+// bodies, step.cpp for the step, query/ for the queries).
 #include <memory>
 #include <string>
 #include <vector>
@@ -24,19 +24,11 @@
 #include "solver/contact_solver.h"
 #include "solver/joint_solver.h"
 #include "solver/resting_loads.h"
+#include "validation.h"
 
 namespace rubble {
 namespace detail {
 
-std::string describe(Vec3 v);
-std::string describe(Quat q);
-/// Throws rubble::Error as "where: what".
-[[noreturn]] void fail(const char* where, const std::string& what);
-void requireFinite(const char* where, const char* name, Vec3 v);
-void requireFinite(const char* where, const char* name, float f);
-void requireNonNegative(const char* where, const char* name, float f);
-/// Unit quaternions are required; small drift (from user arithmetic) is normalised away, anything else refused.
-Quat requireUnit(const char* where, const char* name, Quat q);
 /// R diag(d) R^T as the six entries of a symmetric matrix (xx, yy, zz, xy, xz, yz).
 void rotateDiagonal(Quat r, Vec3 d, float out[6]);
 

@@ -3,7 +3,7 @@
 #include <type_traits>
 
 #include "rubble/error.h"
-#include "world_impl.h"
+#include "validation.h"
 
 namespace rubble::detail {
 

@@ -12,6 +12,7 @@
 
 #include "rubble/error.h"
 #include "shapes/shape.h"
+#include "validation.h"
 
 #include <libqhull_r/qhull_ra.h>
 
@@ -28,7 +29,7 @@ D3 cross(D3 a, D3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x
 double norm(D3 a) { return std::sqrt(dot(a, a)); }
 D3 toD3(Vec3 v) { return {v.x, v.y, v.z}; }
 
-[[noreturn]] void fail(const std::string& what) { throw Error("ConvexHullDef: " + what); }
+constexpr const char* kDef = "ConvexHullDef";
 
 // Relative size below which a cloud counts as flat. Float input carries ~1e-7 relative rounding, so clouds meant to
 // be planar land far below this, while any solid a game would want is far above it.
@@ -49,19 +50,19 @@ void requireVolume(const std::vector<Vec3>& points) {
         return std::pair{best, bestDistance};
     };
     const auto [ia, da0] = farthestFrom([&](D3 p) { return norm(p - p0); });
-    if (!(da0 > 0)) fail(count + " are all the same point: a hull needs volume");
+    if (!(da0 > 0)) fail(kDef, count + " are all the same point: a hull needs volume");
     const D3 a = toD3(points[ia]);
     const auto [ib, length] = farthestFrom([&](D3 p) { return norm(p - a); });
     const D3 b = toD3(points[ib]);
     const D3 axis = b - a;
     const auto [ic, lineDistance] = farthestFrom([&](D3 p) { return norm(cross(axis, p - a)) / length; });
-    if (!(lineDistance > kFlatTolerance * length)) fail(count + " are collinear: a hull needs volume");
+    if (!(lineDistance > kFlatTolerance * length)) fail(kDef, count + " are collinear: a hull needs volume");
     D3 n = cross(axis, toD3(points[ic]) - a);
     const double nl = norm(n);
     n = {n.x / nl, n.y / nl, n.z / nl};
     const auto [id, planeDistance] = farthestFrom([&](D3 p) { return std::abs(dot(n, p - a)); });
     (void)id;
-    if (!(planeDistance > kFlatTolerance * length)) fail(count + " are coplanar: a hull needs volume");
+    if (!(planeDistance > kFlatTolerance * length)) fail(kDef, count + " are coplanar: a hull needs volume");
 }
 
 struct RawFace {
@@ -76,7 +77,7 @@ public:
         // Qhull must never write to the process's stderr; capture its text so errors can quote it.
         err_ = open_memstream(&buffer_, &bufferSize_);
         if (!err_) err_ = std::fopen("/dev/null", "w");
-        if (!err_) fail("cannot open a scratch stream for qhull");
+        if (!err_) fail(kDef, "cannot open a scratch stream for qhull");
         qh_zero(qh_.get(), err_);
     }
     ~QhullRun() {
@@ -181,10 +182,10 @@ std::vector<std::uint32_t> faceLoop(const std::vector<Vec3>& points, const RawFa
 }  // namespace
 
 ConvexHull buildConvexHull(const std::vector<Vec3>& points) {
-    if (points.size() < 4) fail("needs at least 4 points (got " + std::to_string(points.size()) + ")");
-    if (points.size() > std::size_t(INT_MAX / 3)) fail("too many points (" + std::to_string(points.size()) + ")");
+    if (points.size() < 4) fail(kDef, "needs at least 4 points (got " + std::to_string(points.size()) + ")");
+    if (points.size() > std::size_t(INT_MAX / 3)) fail(kDef, "too many points (" + std::to_string(points.size()) + ")");
     for (std::size_t i = 0; i < points.size(); ++i)
-        if (!isFinite(points[i])) fail("points[" + std::to_string(i) + "] is not finite " + formatVec(points[i]));
+        if (!isFinite(points[i])) fail(kDef, "points[" + std::to_string(i) + "] is not finite " + describe(points[i]));
     requireVolume(points);
 
     // Qhull's precision estimates are relative to the coordinates' magnitude, so hand it a centred cloud.
@@ -207,10 +208,10 @@ ConvexHull buildConvexHull(const std::vector<Vec3>& points) {
         QhullRun qhull;
         const int code = qhull.run(coords);
         if (code == qh_ERRsingular)
-            fail("the " + std::to_string(points.size()) + " points are coplanar: a hull needs volume");
+            fail(kDef, "the " + std::to_string(points.size()) + " points are coplanar: a hull needs volume");
         if (code != qh_ERRnone) {
             const std::string detail = qhull.firstErrorLine();
-            fail("qhull failed (code " + std::to_string(code) + ")" + (detail.empty() ? "" : ": " + detail));
+            fail(kDef, "qhull failed (code " + std::to_string(code) + ")" + (detail.empty() ? "" : ": " + detail));
         }
         raw = qhull.faces(coords.data());
     }
@@ -226,7 +227,8 @@ ConvexHull buildConvexHull(const std::vector<Vec3>& points) {
         const double nl = norm(f.normal);
         normals.push_back({f.normal.x / nl, f.normal.y / nl, f.normal.z / nl});
     }
-    if (loops.size() < 4) fail("the " + std::to_string(points.size()) + " points are coplanar: a hull needs volume");
+    if (loops.size() < 4)
+        fail(kDef, "the " + std::to_string(points.size()) + " points are coplanar: a hull needs volume");
 
     std::vector<std::uint32_t> remap(points.size(), UINT32_MAX);
     for (const auto& loop : loops)

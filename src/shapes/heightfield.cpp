@@ -6,29 +6,30 @@
 
 #include "rubble/error.h"
 #include "shapes/shape.h"
+#include "validation.h"
 
 namespace rubble::detail {
 
 namespace {
 
-[[noreturn]] void fail(const std::string& what) { throw Error("HeightfieldDef: " + what); }
+constexpr const char* kDef = "HeightfieldDef";
 
 }  // namespace
 
 Heightfield buildHeightfield(const HeightfieldDef& def) {
-    if (def.rows < 2) fail("rows must be >= 2 (got " + std::to_string(def.rows) + ")");
-    if (def.columns < 2) fail("columns must be >= 2 (got " + std::to_string(def.columns) + ")");
+    if (def.rows < 2) fail(kDef, "rows must be >= 2 (got " + std::to_string(def.rows) + ")");
+    if (def.columns < 2) fail(kDef, "columns must be >= 2 (got " + std::to_string(def.columns) + ")");
     const char* axes[] = {"spacing.x", "spacing.y", "spacing.z"};
     const float spacing[] = {def.spacing.x, def.spacing.y, def.spacing.z};
     for (int i = 0; i < 3; ++i) {
         if (!std::isfinite(spacing[i]))
-            fail(std::string(axes[i]) + " is not finite (" + formatNumber(spacing[i]) + ")");
-        if (!(spacing[i] > 0)) fail(std::string(axes[i]) + " must be > 0 (got " + formatNumber(spacing[i]) + ")");
+            fail(kDef, std::string(axes[i]) + " is not finite (" + formatNumber(spacing[i]) + ")");
+        if (!(spacing[i] > 0)) fail(kDef, std::string(axes[i]) + " must be > 0 (got " + formatNumber(spacing[i]) + ")");
     }
     const std::uint64_t expected = std::uint64_t(def.rows) * def.columns;
     if (def.heights.size() != expected)
-        fail("heights has " + std::to_string(def.heights.size()) +
-             " values but rows * columns = " + std::to_string(expected));
+        fail(kDef, "heights has " + std::to_string(def.heights.size()) +
+                       " values but rows * columns = " + std::to_string(expected));
     Heightfield field;
     field.rows = def.rows;
     field.columns = def.columns;
@@ -37,10 +38,11 @@ Heightfield buildHeightfield(const HeightfieldDef& def) {
     field.heights.resize(def.heights.size());
     for (std::size_t i = 0; i < def.heights.size(); ++i) {
         if (!std::isfinite(def.heights[i]))
-            fail("heights[" + std::to_string(i) + "] is not finite (" + formatNumber(def.heights[i]) + ")");
+            fail(kDef, "heights[" + std::to_string(i) + "] is not finite (" + formatNumber(def.heights[i]) + ")");
         field.heights[i] = def.heights[i] * def.spacing.y;
         if (!std::isfinite(field.heights[i]))
-            fail("heights[" + std::to_string(i) + "] * spacing.y overflows (" + formatNumber(def.heights[i]) + ")");
+            fail(kDef,
+                 "heights[" + std::to_string(i) + "] * spacing.y overflows (" + formatNumber(def.heights[i]) + ")");
     }
     return field;
 }

@@ -7,6 +7,7 @@
 
 #include "rubble/error.h"
 #include "shapes/shape.h"
+#include "validation.h"
 
 namespace rubble::detail {
 

@@ -2,6 +2,7 @@
 // later stage has to distrust a Shape; the heavy work (hulls, mesh grids, mass integration) lives in the
 // neighbouring files.
 #include "shapes/shape.h"
+#include "validation.h"
 
 #include <algorithm>
 #include <cmath>
@@ -15,26 +16,7 @@
 
 namespace rubble::detail {
 
-std::string formatNumber(double value) {
-    // Default stream formatting keeps messages short ("-1", "0.5") and spells non-finite values out.
-    std::ostringstream out;
-    out << value;
-    return out.str();
-}
-
-std::string formatVec(Vec3 v) {
-    std::ostringstream out;
-    out << '(' << v.x << ", " << v.y << ", " << v.z << ')';
-    return out.str();
-}
-
 namespace {
-
-[[noreturn]] void fail(const char* def, const std::string& what) { throw Error(std::string(def) + ": " + what); }
-
-void requireFinite(const char* def, const char* field, float value) {
-    if (!std::isfinite(value)) fail(def, std::string(field) + " is not finite (" + formatNumber(value) + ")");
-}
 
 void requirePositive(const char* def, const char* field, float value) {
     requireFinite(def, field, value);
@@ -147,7 +129,7 @@ struct Builder {
                 throw Error(where + ": " + e.what());
             }
             if (!isFinite(c.local.position))
-                throw Error(where + ": local.position is not finite " + formatVec(c.local.position));
+                throw Error(where + ": local.position is not finite " + describe(c.local.position));
             const Quat q = c.local.rotation;
             if (!isFinite(q))
                 throw Error(where + ": local.rotation is not finite (" + formatNumber(q.x) + ", " + formatNumber(q.y) +

@@ -98,8 +98,6 @@ std::array<Vec3, 3> triangleOf(const Shape& shape, std::uint32_t t);
 std::optional<float> surfaceHeightAt(const Shape& shape, float x, float z);
 
 /// Numbers as error messages show them: "-1", "0.5", "nan", "(nan, 0, 1)".
-std::string formatNumber(double value);
-std::string formatVec(Vec3 v);
 
 // ---- Building blocks of buildShape, exposed for tests, benchmarks and later stages. ----
 

@@ -11,12 +11,13 @@
 
 #include "rubble/error.h"
 #include "shapes/shape.h"
+#include "validation.h"
 
 namespace rubble::detail {
 
 namespace {
 
-[[noreturn]] void fail(const std::string& what) { throw Error("TriangleMeshDef: " + what); }
+constexpr const char* kDef = "TriangleMeshDef";
 
 }  // namespace
 
@@ -41,14 +42,14 @@ std::optional<float> triangleHeightAt(Vec3 a, Vec3 b, Vec3 c, float x, float z) 
 TriangleMesh buildTriangleMesh(const TriangleMeshDef& def) {
     for (std::size_t i = 0; i < def.vertices.size(); ++i)
         if (!isFinite(def.vertices[i]))
-            fail("vertices[" + std::to_string(i) + "] is not finite " + formatVec(def.vertices[i]));
-    if (def.indices.empty()) fail("needs at least one triangle (indices is empty)");
+            fail(kDef, "vertices[" + std::to_string(i) + "] is not finite " + describe(def.vertices[i]));
+    if (def.indices.empty()) fail(kDef, "needs at least one triangle (indices is empty)");
     if (def.indices.size() % 3 != 0)
-        fail("indices has " + std::to_string(def.indices.size()) + " values, not a multiple of 3");
+        fail(kDef, "indices has " + std::to_string(def.indices.size()) + " values, not a multiple of 3");
     for (std::size_t i = 0; i < def.indices.size(); ++i)
         if (def.indices[i] >= def.vertices.size())
-            fail("indices[" + std::to_string(i) + "] = " + std::to_string(def.indices[i]) + " is out of range (" +
-                 std::to_string(def.vertices.size()) + " vertices)");
+            fail(kDef, "indices[" + std::to_string(i) + "] = " + std::to_string(def.indices[i]) + " is out of range (" +
+                           std::to_string(def.vertices.size()) + " vertices)");
 
     TriangleMesh mesh;
     mesh.vertices = def.vertices;
