@@ -101,27 +101,19 @@ std::uint32_t StaticBodies::pushBack() { return pushBackImpl(*this); }
 std::uint32_t StaticBodies::swapRemove(std::uint32_t dense) { return swapRemoveImpl(*this, dense); }
 
 BodyId BodyStorage::allocate(BodySet set, std::uint32_t& denseOut) {
-    std::uint32_t slotIndex;
-    if (!freeSlots_.empty()) {
-        slotIndex = freeSlots_.back();
-        freeSlots_.pop_back();
-    } else {
-        slotIndex = static_cast<std::uint32_t>(slots_.size());
-        slots_.push_back({});
-    }
+    const BodyId id = ids_.acquire();
+    const std::uint32_t slotIndex = id.index;
+    if (slotIndex == slots_.size()) slots_.push_back({});
     ++layoutChanges_;
     BodySlot& slot = slots_[slotIndex];
-    slot.generation += 1;
-    if (slot.generation == 0) slot.generation = 1;  // 0 is the null handle; wrapping after 4 billion reuses is fine
     slot.set = set;
-    slot.alive = true;
     slot.dense = set == BodySet::Moving ? moving.pushBack() : statics.pushBack();
     if (set == BodySet::Moving)
         moving.slot[slot.dense] = slotIndex;
     else
         statics.slot[slot.dense] = slotIndex;
     denseOut = slot.dense;
-    return BodyId{slotIndex, slot.generation};
+    return id;
 }
 
 void BodyStorage::release(BodyId id) {
@@ -130,16 +122,10 @@ void BodyStorage::release(BodyId id) {
     const std::uint32_t moved =
         slot.set == BodySet::Moving ? moving.swapRemove(slot.dense) : statics.swapRemove(slot.dense);
     if (moved != ~0u) slots_[moved].dense = slot.dense;
-    slot.alive = false;
-    freeSlots_.push_back(id.index);
+    ids_.release(id.index);
 }
 
-const BodySlot* BodyStorage::find(BodyId id) const {
-    if (id.isNull() || id.index >= slots_.size()) return nullptr;
-    const BodySlot& slot = slots_[id.index];
-    if (!slot.alive || slot.generation != id.generation) return nullptr;
-    return &slot;
-}
+const BodySlot* BodyStorage::find(BodyId id) const { return ids_.contains(id) ? &slots_[id.index] : nullptr; }
 
 std::string BodyStorage::checkInvariants() const {
     std::string problem;
@@ -154,8 +140,8 @@ std::string BodyStorage::checkInvariants() const {
     checkLengths(statics, "static bodies");
     std::uint32_t alive = 0;
     for (std::uint32_t s = 0; s < slots_.size() && problem.empty(); ++s) {
+        if (!ids_.alive(s)) continue;
         const BodySlot& slot = slots_[s];
-        if (!slot.alive) continue;
         ++alive;
         const auto& back = slot.set == BodySet::Moving ? moving.slot : statics.slot;
         if (slot.dense >= back.size() || back[slot.dense] != s)

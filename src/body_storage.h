@@ -10,6 +10,7 @@
 #include "rubble/body.h"
 #include "rubble/id.h"
 #include "rubble/math.h"
+#include "slot_map.h"
 
 namespace rubble::detail {
 
@@ -71,12 +72,10 @@ struct StaticBodies {
 
 enum class BodySet : std::uint8_t { Moving, Static };
 
-/// Slot map entry: where a body lives now.
+/// What a body's slot holds: where the body lives now.
 struct BodySlot {
     std::uint32_t dense = 0;
-    std::uint32_t generation = 0;  ///< generation of the current (or last) occupant; handles match it
     BodySet set = BodySet::Moving;
-    bool alive = false;
 };
 
 /// The slot map plus both sets.
@@ -91,7 +90,11 @@ public:
     /// Null pointer when the handle is null, out of range or stale.
     const BodySlot* find(BodyId id) const;
     std::uint32_t count() const { return moving.size() + statics.size(); }
+    /// Where each slot's body lives, by slot (meaningful while alive(slot)).
     const std::vector<BodySlot>& slots() const { return slots_; }
+    bool alive(std::uint32_t slot) const { return ids_.alive(slot); }
+    /// The handle of the body in `slot` (its last body when the slot is free).
+    BodyId idAt(std::uint32_t slot) const { return ids_.idAt(slot); }
     /// Counts the bodies added and removed: while it stays the same, every dense index names the same body.
     std::uint64_t layoutChanges() const { return layoutChanges_; }
     /// Debug aid (RUBBLE_VALIDATE): every live slot points at a row that points back, every array has the
@@ -99,8 +102,8 @@ public:
     std::string checkInvariants() const;
 
 private:
+    SlotMap<BodyId> ids_;
     std::vector<BodySlot> slots_;
-    std::vector<std::uint32_t> freeSlots_;
     std::uint64_t layoutChanges_ = 0;
 };
 

@@ -40,7 +40,6 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
     chunkMatches_.assign(chunks, {});
     chunkMisses_.resize(chunks);
     previousMatched_.assign(previous_.size(), 0);
-    const auto& slots = storage.slots();
     // Manifolds come in canonical order, which changes little from step to step: each chunk tries last step's
     // entries from its own first index, then from the entry after the last match, so a settled scene reads last
     // step's entries in order. Only the manifolds the guess misses are looked up afterwards, among the entries it
@@ -58,7 +57,7 @@ void ContactCache::warmStart(const Contacts& contacts, const BodyStorage& storag
             const std::uint32_t slotA = slotOf(storage, p.a, p.aStatic), slotB = slotOf(storage, p.b, p.bStatic);
             ContactKey key;
             key.slots = (std::uint64_t{slotA} << 32) | slotB;
-            key.generations = (std::uint64_t{slots[slotA].generation} << 32) | slots[slotB].generation;
+            key.generations = (std::uint64_t{storage.idAt(slotA).generation} << 32) | storage.idAt(slotB).generation;
             key.parts = (std::uint64_t{p.triangle} << 32) | (std::uint64_t{p.childA} << 16) | p.childB;
             currentKeys_[m] = key;
             if (previous_.empty()) continue;

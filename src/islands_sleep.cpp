@@ -40,8 +40,9 @@ void pickIslands(std::uint32_t islands, TaskPool& pool, std::vector<std::vector<
 void SleepingIslands::linkSleepingIslands(const BodyStorage& storage, std::vector<IslandEdge>& edges) const {
     if (sleepingBodies_ == 0) return;
     const auto& slots = storage.slots();
-    for (const Group& g : groups_) {
-        if (!g.alive) continue;
+    for (std::uint32_t index = 0; index < groups_.size(); ++index) {
+        if (!groupIds_.alive(index)) continue;
+        const Group& g = groups_[index];
         const std::uint32_t first = slots[g.slots[0]].dense;
         for (std::size_t k = 1; k < g.slots.size(); ++k) edges.emplace_back(first, slots[g.slots[k]].dense);
     }
@@ -124,16 +125,9 @@ void SleepingIslands::fallAsleep(const Islands& islands, const Contacts& contact
         return true;
     });
     for (std::uint32_t k : sleeping) {
-        std::uint32_t g;
-        if (!freeGroups_.empty()) {
-            g = freeGroups_.back();
-            freeGroups_.pop_back();
-        } else {
-            g = static_cast<std::uint32_t>(groups_.size());
-            groups_.emplace_back();
-        }
+        const std::uint32_t g = groupIds_.acquire().index;
+        if (g == groups_.size()) groups_.emplace_back();
         Group& group = groups_[g];
-        group.alive = true;
         group.slots.clear();
         group.manifolds.clear();
         for (std::uint32_t at = islands.bodyStart[k]; at < islands.bodyStart[k + 1]; ++at) {
@@ -162,8 +156,8 @@ void SleepingIslands::fallAsleep(const Islands& islands, const Contacts& contact
 }
 
 void SleepingIslands::wakeGroup(std::uint32_t g, BodyStorage& storage, std::vector<KeptManifold>& out) {
+    if (!groupIds_.alive(g)) return;
     Group& group = groups_[g];
-    if (!group.alive) return;
     MovingBodies& m = storage.moving;
     const auto& slots = storage.slots();
     for (std::uint32_t slot : group.slots) {
@@ -173,10 +167,9 @@ void SleepingIslands::wakeGroup(std::uint32_t g, BodyStorage& storage, std::vect
     }
     sleepingBodies_ -= static_cast<std::uint32_t>(group.slots.size());
     out.insert(out.end(), group.manifolds.begin(), group.manifolds.end());
-    group.alive = false;
     group.slots.clear();
     group.manifolds.clear();
-    freeGroups_.push_back(g);
+    groupIds_.release(g);
 }
 
 void SleepingIslands::wake(std::uint32_t dense, BodyStorage& storage) {
@@ -189,15 +182,15 @@ void SleepingIslands::wakeTouching(std::uint32_t slot, BodyStorage& storage, con
     std::vector<std::uint32_t> partners;
     cache.partnersOf(slot, partners);
     for (std::uint32_t g = 0; g < groups_.size(); ++g) {
+        if (!groupIds_.alive(g)) continue;
         const Group& group = groups_[g];
-        if (!group.alive) continue;
         const bool touches = std::any_of(group.manifolds.begin(), group.manifolds.end(),
                                          [&](const KeptManifold& k) { return k.pair.a == slot || k.pair.b == slot; });
         if (touches) wakeGroup(g, storage, pendingWarmStarts_);
     }
     const auto& slots = storage.slots();
     for (std::uint32_t p : partners)
-        if (slots[p].alive && slots[p].set == BodySet::Moving) wake(slots[p].dense, storage);
+        if (storage.alive(p) && slots[p].set == BodySet::Moving) wake(slots[p].dense, storage);
 }
 
 void SleepingIslands::wakeAll(BodyStorage& storage) {

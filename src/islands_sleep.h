@@ -21,6 +21,7 @@
 #include "integrate.h"
 #include "islands.h"
 #include "rubble/settings.h"
+#include "slot_map.h"
 
 namespace rubble::detail {
 
@@ -56,13 +57,13 @@ private:
     struct Group {
         std::vector<std::uint32_t> slots;  ///< its bodies
         std::vector<KeptManifold> manifolds;
-        bool alive = false;
     };
+    using GroupId = Handle<Group>;
     /// Wakes group g and appends its kept manifolds to `out`.
     void wakeGroup(std::uint32_t g, BodyStorage& storage, std::vector<KeptManifold>& out);
 
-    std::vector<Group> groups_;
-    std::vector<std::uint32_t> freeGroups_;
+    SlotMap<GroupId> groupIds_;
+    std::vector<Group> groups_;  ///< by group slot
     std::vector<KeptManifold> pendingWarmStarts_;
     std::vector<std::uint8_t> touchedByKinematic_;  ///< per island of the step: touches a moving kinematic body
     std::vector<std::vector<std::uint32_t>> chunkIslands_;

@@ -5,19 +5,10 @@
 namespace rubble::detail {
 
 JointId JointStore::add(const Joint& joint) {
-    std::uint32_t slot;
-    if (!freeSlots_.empty()) {
-        slot = freeSlots_.back();
-        freeSlots_.pop_back();
-    } else {
-        slot = static_cast<std::uint32_t>(slots_.size());
-        slots_.emplace_back();
-    }
-    Slot& s = slots_[slot];
-    s.generation += 1;
-    if (s.generation == 0) s.generation = 1;
-    s.alive = true;
-    s.dense = static_cast<std::uint32_t>(joints_.size());
+    const JointId id = ids_.acquire();
+    const std::uint32_t slot = id.index;
+    if (slot == denseOfSlot_.size()) denseOfSlot_.push_back(0);
+    denseOfSlot_[slot] = static_cast<std::uint32_t>(joints_.size());
     joints_.push_back(joint);
     joints_.back().slot = slot;
     if (joint.broken) brokenCount_ += 1;
@@ -25,7 +16,7 @@ JointId JointStore::add(const Joint& joint) {
         if (body.index >= jointsOfBody_.size()) jointsOfBody_.resize(body.index + 1);
         jointsOfBody_[body.index].push_back(slot);
     }
-    return {slot, s.generation};
+    return id;
 }
 
 void JointStore::unlink(std::uint32_t bodySlot, std::uint32_t jointSlot) {
@@ -37,34 +28,30 @@ void JointStore::unlink(std::uint32_t bodySlot, std::uint32_t jointSlot) {
 void JointStore::remove(JointId id) {
     const Joint* joint = find(id);
     if (!joint) return;
-    const std::uint32_t dense = slots_[id.index].dense;
+    const std::uint32_t dense = denseOfSlot_[id.index];
     unlink(joint->bodyA.index, id.index);
     unlink(joint->bodyB.index, id.index);
     if (joint->broken) brokenCount_ -= 1;
     const std::uint32_t last = size() - 1;
     if (dense != last) {
         joints_[dense] = joints_[last];
-        slots_[joints_[dense].slot].dense = dense;
+        denseOfSlot_[joints_[dense].slot] = dense;
     }
     joints_.pop_back();
-    slots_[id.index].alive = false;
-    freeSlots_.push_back(id.index);
+    ids_.release(id.index);
 }
 
 Joint* JointStore::find(JointId id) { return const_cast<Joint*>(static_cast<const JointStore*>(this)->find(id)); }
 
 const Joint* JointStore::find(JointId id) const {
-    if (id.isNull() || id.index >= slots_.size()) return nullptr;
-    const Slot& s = slots_[id.index];
-    if (!s.alive || s.generation != id.generation) return nullptr;
-    return &joints_[s.dense];
+    return ids_.contains(id) ? &joints_[denseOfSlot_[id.index]] : nullptr;
 }
 
 std::uint32_t JointStore::removeAttachedTo(BodyId body) {
     if (body.index >= jointsOfBody_.size()) return 0;
     // Copied: remove() edits the list.
     const std::vector<std::uint32_t> attached = jointsOfBody_[body.index];
-    for (std::uint32_t slot : attached) remove({slot, slots_[slot].generation});
+    for (std::uint32_t slot : attached) remove(ids_.idAt(slot));
     return static_cast<std::uint32_t>(attached.size());
 }
 

@@ -13,6 +13,7 @@
 #include "rubble/id.h"
 #include "rubble/joint.h"
 #include "rubble/math.h"
+#include "slot_map.h"
 
 namespace rubble::detail {
 
@@ -60,7 +61,7 @@ public:
     std::uint32_t size() const { return static_cast<std::uint32_t>(joints_.size()); }
     /// Joints that have not broken.
     std::uint32_t activeCount() const { return size() - brokenCount_; }
-    JointId idOf(std::uint32_t dense) const { return {joints_[dense].slot, slots_[joints_[dense].slot].generation}; }
+    JointId idOf(std::uint32_t dense) const { return ids_.idAt(joints_[dense].slot); }
 
     /// Marks a joint broken and queues its report.
     void markBroken(std::uint32_t dense);
@@ -71,16 +72,11 @@ public:
     void appendEdges(const BodyStorage& bodies, std::vector<std::pair<std::uint32_t, std::uint32_t>>& edges) const;
 
 private:
-    struct Slot {
-        std::uint32_t dense = 0;
-        std::uint32_t generation = 0;
-        bool alive = false;
-    };
     void unlink(std::uint32_t bodySlot, std::uint32_t jointSlot);
 
     std::vector<Joint> joints_;
-    std::vector<Slot> slots_;
-    std::vector<std::uint32_t> freeSlots_;
+    SlotMap<JointId> ids_;
+    std::vector<std::uint32_t> denseOfSlot_;                ///< joint slot -> index in joints_
     std::vector<std::vector<std::uint32_t>> jointsOfBody_;  ///< body slot -> joint slots
     std::vector<JointId> brokenReports_;
     std::uint32_t brokenCount_ = 0;

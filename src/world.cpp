@@ -86,24 +86,17 @@ World& World::operator=(World&&) noexcept = default;
 ShapeId World::createShape(const ShapeDef& def) {
     Shape shape = detail::buildShape(def);
     Impl& w = *impl_;
-    std::uint32_t index;
-    if (!w.freeShapes.empty()) {
-        index = w.freeShapes.back();
-        w.freeShapes.pop_back();
-        w.shapes[index] = std::move(shape);
-    } else {
-        index = static_cast<std::uint32_t>(w.shapes.size());
+    const ShapeId id = w.shapeIds.acquire();
+    const std::uint32_t index = id.index;
+    if (index == w.shapes.size()) {
         w.shapes.push_back(std::move(shape));
-        w.shapeGeneration.push_back(0);
         w.shapeUsers.push_back(0);
-        w.shapeAlive.push_back(false);
+    } else {
+        w.shapes[index] = std::move(shape);
     }
     if (!w.shapes[index].staticOnly()) w.shapeBounds.set(index, detail::shapeBoundsInfo(w.shapes[index]));
-    w.shapeGeneration[index] += 1;
-    if (w.shapeGeneration[index] == 0) w.shapeGeneration[index] = 1;
-    w.shapeAlive[index] = true;
     w.shapeUsers[index] = 0;
-    return ShapeId{index, w.shapeGeneration[index]};
+    return id;
 }
 
 void World::destroyShape(ShapeId id) {
@@ -112,16 +105,11 @@ void World::destroyShape(ShapeId id) {
     if (w.shapeUsers[id.index] != 0)
         fail("World::destroyShape", "shape " + std::to_string(id.index) + " is still used by " +
                                         std::to_string(w.shapeUsers[id.index]) + " bodies");
-    w.shapeAlive[id.index] = false;
     w.shapes[id.index] = Shape{};
-    w.freeShapes.push_back(id.index);
+    w.shapeIds.release(id.index);
 }
 
-bool World::isValid(ShapeId id) const {
-    const Impl& w = *impl_;
-    return !id.isNull() && id.index < w.shapes.size() && w.shapeAlive[id.index] &&
-           w.shapeGeneration[id.index] == id.generation;
-}
+bool World::isValid(ShapeId id) const { return impl_->shapeIds.contains(id); }
 
 MassProperties World::shapeMassProperties(ShapeId id) const {
     return impl_->shapeOf(id, "World::shapeMassProperties").unitMass;
@@ -221,9 +209,9 @@ std::uint32_t World::bodyCount() const { return impl_->bodies.count(); }
 std::vector<BodyId> World::bodies() const {
     std::vector<BodyId> out;
     out.reserve(impl_->bodies.count());
-    const auto& slots = impl_->bodies.slots();
-    for (std::uint32_t s = 0; s < slots.size(); ++s)
-        if (slots[s].alive) out.push_back(BodyId{s, slots[s].generation});
+    const detail::BodyStorage& bodies = impl_->bodies;
+    for (std::uint32_t s = 0; s < bodies.slots().size(); ++s)
+        if (bodies.alive(s)) out.push_back(bodies.idAt(s));
     return out;
 }
 
@@ -238,7 +226,7 @@ ShapeId World::bodyShape(BodyId id) const {
     const BodySlot& s = w.slotOf(id, "World::bodyShape");
     const std::uint32_t index =
         s.set == BodySet::Moving ? w.bodies.moving.shape[s.dense] : w.bodies.statics.shape[s.dense];
-    return ShapeId{index, w.shapeGeneration[index]};
+    return w.shapeIds.idAt(index);
 }
 
 Transform World::transform(BodyId id) const {
@@ -540,8 +528,8 @@ std::uint64_t World::stateHash() const {
     std::uint64_t h = 0xcbf29ce484222325ull;
     const auto& slots = w.bodies.slots();
     for (std::uint32_t s = 0; s < slots.size(); ++s) {
-        if (!slots[s].alive) continue;
-        h = mix(h, (std::uint64_t{s} << 32) | slots[s].generation);
+        if (!w.bodies.alive(s)) continue;
+        h = mix(h, (std::uint64_t{s} << 32) | w.bodies.idAt(s).generation);
         const std::uint32_t i = slots[s].dense;
         if (slots[s].set == BodySet::Static) {
             const auto& b = w.bodies.statics;

@@ -21,6 +21,7 @@
 #include "query/query_cache.h"
 #include "rubble/world.h"
 #include "shapes/shape.h"
+#include "slot_map.h"
 #include "solver/contact_solver.h"
 #include "solver/joint_solver.h"
 #include "solver/resting_loads.h"
@@ -50,11 +51,9 @@ struct World::Impl {
     std::unique_ptr<detail::TaskPool> pool;
     detail::BodyStorage bodies;
 
-    std::vector<Shape> shapes;
-    std::vector<std::uint32_t> shapeGeneration;
-    std::vector<std::uint32_t> shapeUsers;
-    std::vector<bool> shapeAlive;
-    std::vector<std::uint32_t> freeShapes;
+    detail::SlotMap<ShapeId> shapeIds;
+    std::vector<Shape> shapes;              ///< by shape slot
+    std::vector<std::uint32_t> shapeUsers;  ///< by shape slot: bodies using it
 
     detail::IntegrationScratch integrationScratch;
     detail::ShapeBoundsTable shapeBounds;
@@ -95,7 +94,7 @@ struct World::Impl {
 
     const Shape& shapeOf(ShapeId id, const char* where) const {
         if (id.isNull()) fail(where, "the shape handle is null");
-        if (id.index >= shapes.size() || !shapeAlive[id.index] || shapeGeneration[id.index] != id.generation)
+        if (!shapeIds.contains(id))
             fail(where, "shape handle (index " + std::to_string(id.index) + ", generation " +
                             std::to_string(id.generation) + ") is stale or not from this world");
         return shapes[id.index];
@@ -181,7 +180,7 @@ struct World::Impl {
         m.fx[i] = m.fy[i] = m.fz[i] = m.tx[i] = m.ty[i] = m.tz[i] = 0;
         refreshWorldInertia(i);
         const std::uint32_t slot = m.slot[i];
-        frozenReports.push_back(BodyId{slot, bodies.slots()[slot].generation});
+        frozenReports.push_back(bodies.idAt(slot));
         profile.frozenCount += 1;
     }
 

@@ -1,42 +1,30 @@
 #pragma once
 // Handles are small value types: a slot index plus a generation. A default-constructed handle is null.
+// Every kind of object a world owns has one, all of the same make; the kind only keeps them apart in the types.
 // This header includes nothing else on purpose.
 
 namespace rubble {
 
-/// Handle to a body. Stays valid while the body exists, whatever else is added or removed.
-struct BodyId {
-    unsigned index = 0;       ///< slot in the world's slot map
+template <class Tag>
+struct Handle {
+    unsigned index = 0;       ///< slot in the world's slot map for this kind
     unsigned generation = 0;  ///< 0 means null; bumped each time the slot is reused
 
     constexpr bool isNull() const { return generation == 0; }
-    friend constexpr bool operator==(BodyId a, BodyId b) { return a.index == b.index && a.generation == b.generation; }
-    friend constexpr bool operator!=(BodyId a, BodyId b) { return !(a == b); }
+    friend constexpr bool operator==(Handle a, Handle b) { return a.index == b.index && a.generation == b.generation; }
+    friend constexpr bool operator!=(Handle a, Handle b) { return !(a == b); }
 };
 
+struct BodyTag;
+struct ShapeTag;
+struct JointTag;
+
+/// Handle to a body. Stays valid while the body exists, whatever else is added or removed.
+using BodyId = Handle<BodyTag>;
 /// Handle to a shape owned by a world. Shapes are shared by any number of bodies.
-struct ShapeId {
-    unsigned index = 0;
-    unsigned generation = 0;  ///< 0 means null
-
-    constexpr bool isNull() const { return generation == 0; }
-    friend constexpr bool operator==(ShapeId a, ShapeId b) {
-        return a.index == b.index && a.generation == b.generation;
-    }
-    friend constexpr bool operator!=(ShapeId a, ShapeId b) { return !(a == b); }
-};
-
+using ShapeId = Handle<ShapeTag>;
 /// Handle to a joint. Stays valid until the joint is destroyed, or one of its bodies is (a broken joint keeps its
 /// handle: see World::isJointBroken).
-struct JointId {
-    unsigned index = 0;
-    unsigned generation = 0;  ///< 0 means null
-
-    constexpr bool isNull() const { return generation == 0; }
-    friend constexpr bool operator==(JointId a, JointId b) {
-        return a.index == b.index && a.generation == b.generation;
-    }
-    friend constexpr bool operator!=(JointId a, JointId b) { return !(a == b); }
-};
+using JointId = Handle<JointTag>;
 
 }  // namespace rubble

@@ -707,9 +707,9 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
             // added or removed since last step, else taken over with a reused entry.
             const auto identify = [&] {
                 const std::uint32_t slot1 = m.slot[first], slot2 = secondStatic ? st.slot[second] : m.slot[second];
-                const auto& slots = storage.slots();
                 now.slots = (std::uint64_t{slot1} << 32) | slot2;
-                now.generations = (std::uint64_t{slots[slot1].generation} << 32) | slots[slot2].generation;
+                now.generations =
+                    (std::uint64_t{storage.idAt(slot1).generation} << 32) | storage.idAt(slot2).generation;
             };
             const bool sameBodies = reuse_.sameBodies();
             if (!sameBodies) identify();

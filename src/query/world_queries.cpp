@@ -80,7 +80,7 @@ public:
         const detail::StaticBodies& b = w_.bodies.statics;
         const detail::BodySlot& s = w_.bodies.slots()[slot];
         const std::uint32_t i = s.dense;
-        const BodyId id{slot, s.generation};
+        const BodyId id = w_.bodies.idAt(slot);
         if (!accepts(b.filterCategory[i], b.filterMask[i], id)) return nullptr;
         last_ = {id, &w_.shapes[b.shape[i]], {{b.px[i], b.py[i], b.pz[i]}, {b.qx[i], b.qy[i], b.qz[i], b.qw[i]}}};
         lastAccepted_ = true;
@@ -94,7 +94,7 @@ public:
         const bool kinematic = (m.flags[dense] & detail::kFlagKinematic) != 0;
         if (!(kinematic ? filter_.includeKinematic : filter_.includeDynamic)) return nullptr;
         const std::uint32_t slot = m.slot[dense];
-        const BodyId id{slot, w_.bodies.slots()[slot].generation};
+        const BodyId id = w_.bodies.idAt(slot);
         if (!accepts(m.filterCategory[dense], m.filterMask[dense], id)) return nullptr;
         const Quat q = w_.orientationOf(dense);
         last_ = {id,

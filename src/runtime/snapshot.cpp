@@ -41,7 +41,7 @@ void writeSnapshot(const World& world, bool layoutChanged, Snapshot& out) {
         const StaticBodies& s = w.bodies.statics;
         for (std::uint32_t i = 0; i < s.size(); ++i) {
             const std::uint32_t slot = s.slot[i];
-            out.generation[slot] = slots[slot].generation;
+            out.generation[slot] = w.bodies.idAt(slot).generation;
             out.px[slot] = s.px[i], out.py[slot] = s.py[i], out.pz[slot] = s.pz[i];
             out.qx[slot] = s.qx[i], out.qy[slot] = s.qy[i], out.qz[slot] = s.qz[i], out.qw[slot] = s.qw[i];
             out.shape[slot] = s.shape[i];
@@ -49,7 +49,7 @@ void writeSnapshot(const World& world, bool layoutChanged, Snapshot& out) {
         }
         for (std::uint32_t i = 0; i < m.size(); ++i) {
             const std::uint32_t slot = m.slot[i];
-            out.generation[slot] = slots[slot].generation;
+            out.generation[slot] = w.bodies.idAt(slot).generation;
             out.shape[slot] = m.shape[i];
         }
     }

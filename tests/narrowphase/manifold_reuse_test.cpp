@@ -364,7 +364,7 @@ TEST(ManifoldReuse, ABodyThatTookAnotherOnesSlotIsComputedAgain) {
     const Quat q{m.qx[last], m.qy[last], m.qz[last], m.qw[last]};
     const std::uint32_t shape = m.shape[last];
     ASSERT_EQ(shape, pile.topCube);
-    scene.storage.release(BodyId{slot, scene.storage.slots()[slot].generation});
+    scene.storage.release(scene.storage.idAt(slot));
     scene.shapes[shape] = buildShape(ConvexHullDef{rubble::test::boxCorners({0.8f, 0.6f, 0.7f})});
     scene.table.set(shape, shapeBoundsInfo(scene.shapes[shape]));
     const std::uint32_t again = scene.addMoving(shape, p, q);
