@@ -13,8 +13,8 @@
 #include "rubble/world.h"
 #include "solver/contact_solver.h"
 #include "thread_counts.h"
-#include "world_access.h"
-#include "world_impl.h"
+#include "world/world_access.h"
+#include "world/world_impl.h"
 
 namespace {
 

@@ -7,9 +7,9 @@
 #include <random>
 #include <vector>
 
-#include "body_storage.h"
-#include "integrate.h"
-#include "parallel.h"
+#include "core/parallel.h"
+#include "integrate/integrate.h"
+#include "storage/body_storage.h"
 
 namespace {
 

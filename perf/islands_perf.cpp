@@ -8,8 +8,8 @@
 
 #include <string>
 
-#include "islands.h"
-#include "parallel.h"
+#include "core/parallel.h"
+#include "islands/islands.h"
 #include "rubble/scene.h"
 #include "rubble/world.h"
 

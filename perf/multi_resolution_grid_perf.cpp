@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "broadphase/multi_resolution_grid.h"
-#include "parallel.h"
+#include "core/parallel.h"
 #include "support/broadphase_scenarios.h"
 
 namespace {

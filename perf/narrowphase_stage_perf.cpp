@@ -13,14 +13,14 @@
 #include <string>
 #include <vector>
 
-#include "body_storage.h"
-#include "bounds.h"
+#include "bounds/bounds.h"
 #include "broadphase/broadphase_stage.h"
+#include "core/parallel.h"
 #include "narrowphase/narrowphase_stage.h"
-#include "parallel.h"
 #include "rubble/scene.h"
 #include "rubble/world.h"
 #include "shapes/shape.h"
+#include "storage/body_storage.h"
 #include "thread_counts.h"
 
 namespace {

@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "bounds.h"
+#include "bounds/bounds.h"
 #include "broadphase/static_bvh.h"
-#include "parallel.h"
+#include "core/parallel.h"
 #include "query/tree_queries.h"
 #include "rubble/scene.h"
 #include "rubble/world.h"

@@ -1,4 +1,4 @@
-// The resting-load guess for new contacts (src/solver/resting_loads.cpp), on the contacts of real steps:
+// The resting-load guess for new contacts (src/contacts/resting_loads.cpp), on the contacts of real steps:
 // - S5 first step: every one of the wall's manifolds is new, so all 5,050 cubes are balanced top down (the cost a
 //   stack pays once, when it appears);
 // - S3 after 300 steps: bodies still meet new triangles as they roll, and the guess visits only those bodies
@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "parallel.h"
+#include "contacts/resting_loads.h"
+#include "core/parallel.h"
 #include "rubble/scene.h"
 #include "rubble/world.h"
-#include "solver/resting_loads.h"
-#include "world_access.h"
+#include "world/world_access.h"
 
 namespace {
 

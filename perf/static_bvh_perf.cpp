@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "broadphase/static_bvh.h"
-#include "parallel.h"
+#include "core/parallel.h"
 #include "scene/generators.h"
 #include "shapes/shape.h"
 

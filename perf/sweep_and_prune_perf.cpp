@@ -13,7 +13,7 @@
 
 #include "broadphase/radix_sort.h"
 #include "broadphase/sweep_and_prune.h"
-#include "parallel.h"
+#include "core/parallel.h"
 #include "support/broadphase_scenarios.h"
 
 namespace {

@@ -4,7 +4,7 @@
 // Quaternions are (x, y, z) vector part and w scalar part, multiplied as in include/rubble/math.h.
 // Caveat for float instantiations under GCC 12: its SLP vectoriser may fuse the alternating +/- lanes of the
 // quaternion product into vfmsubadd even with -ffp-contract=off; a file that needs bit agreement with the wide form
-// disables it (see src/integrate.cpp).
+// disables it (see src/integrate/integrate.cpp).
 #include <cstddef>
 
 #include "simd/simd.h"

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <random>
 
-#include "bounds.h"
-#include "parallel.h"
+#include "bounds/bounds.h"
+#include "core/parallel.h"
 #include "rubble/world.h"
 
 using namespace rubble;

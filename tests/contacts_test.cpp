@@ -5,8 +5,8 @@
 
 #include <algorithm>
 
-#include "contacts.h"
-#include "parallel.h"
+#include "contacts/contact_cache.h"
+#include "core/parallel.h"
 
 using namespace rubble;
 using namespace rubble::detail;

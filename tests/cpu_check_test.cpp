@@ -5,7 +5,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "cpu_check.h"
+#include "core/cpu_check.h"
 #include "rubble/build_info.h"
 #include "rubble/error.h"
 #include "rubble/world.h"

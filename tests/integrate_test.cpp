@@ -13,11 +13,11 @@
 #include <random>
 #include <vector>
 
-#include "body_storage.h"
-#include "integrate.h"
-#include "parallel.h"
+#include "core/parallel.h"
+#include "integrate/integrate.h"
 #include "simd/simd.h"
 #include "simd/vec.h"
+#include "storage/body_storage.h"
 
 namespace rubble::detail {
 namespace {

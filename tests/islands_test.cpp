@@ -7,8 +7,8 @@
 #include <queue>
 #include <random>
 
-#include "islands.h"
-#include "parallel.h"
+#include "core/parallel.h"
+#include "islands/islands.h"
 
 namespace rubble::detail {
 namespace {

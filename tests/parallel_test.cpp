@@ -5,7 +5,7 @@
 #include <atomic>
 #include <vector>
 
-#include "parallel.h"
+#include "core/parallel.h"
 
 using rubble::detail::TaskPool;
 

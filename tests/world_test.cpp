@@ -9,9 +9,9 @@
 #include <map>
 #include <random>
 
-#include "body_storage.h"
 #include "rubble/error.h"
 #include "rubble/world.h"
+#include "storage/body_storage.h"
 #include "support/error_of.h"
 
 using namespace rubble;

@@ -107,7 +107,7 @@ public:
     std::uint64_t stepCount() const;
 
     // -----------------------------------------------------------------------------------------------------------
-    // Joints (include/rubble/joint.h, src/joint_storage.h, src/solver/joint_solver.h)
+    // Joints (include/rubble/joint.h, src/storage/joint_storage.h, src/solver/joint_solver.h)
     //
     // Joints are solved in the same velocity iterations as the contacts (joints first, then the contacts). A body may
     // have any number of joints; destroyBody destroys the joints attached to the body (their JointIds become
@@ -184,7 +184,7 @@ public:
                              const QueryFilter& filter = {}) const;
 
     // -----------------------------------------------------------------------------------------------------------
-    // Debug draw (include/rubble/debug_draw.h, src/debug_draw.cpp)
+    // Debug draw (include/rubble/debug_draw.h, src/world/debug_draw.cpp)
 
     /// Draws what `options` selects (shapes at their bodies' poses, AABBs, last step's contact points and normals,
     /// sleeping state, last step's broad-phase cells, joints) into `draw`. Const: may run between steps on any one

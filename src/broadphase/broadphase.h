@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "aligned_vector.h"
+#include "storage/aligned_vector.h"
 
 namespace rubble::detail {
 

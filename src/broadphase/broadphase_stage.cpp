@@ -8,7 +8,7 @@
 #include "broadphase/radix_sort.h"
 #include "broadphase/static_bvh.h"
 #include "broadphase/sweep_and_prune.h"
-#include "parallel.h"
+#include "core/parallel.h"
 
 namespace rubble::detail {
 namespace {

@@ -6,10 +6,10 @@
 #include <optional>
 #include <vector>
 
-#include "body_storage.h"
 #include "broadphase/broadphase.h"
 #include "rubble/settings.h"
 #include "shapes/shape.h"
+#include "storage/body_storage.h"
 
 namespace rubble::detail {
 

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "parallel.h"
+#include "core/parallel.h"
 #include "simd/simd.h"
 
 namespace rubble::detail {

@@ -29,9 +29,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "aligned_vector.h"
 #include "broadphase/broadphase.h"
 #include "broadphase/radix_sort.h"
+#include "storage/aligned_vector.h"
 
 namespace rubble::detail {
 

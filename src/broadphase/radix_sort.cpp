@@ -5,7 +5,7 @@
 #include <cassert>
 #include <cstring>
 
-#include "parallel.h"
+#include "core/parallel.h"
 
 namespace rubble::detail {
 

@@ -13,8 +13,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "aligned_vector.h"
 #include "broadphase/broadphase.h"
+#include "storage/aligned_vector.h"
 
 namespace rubble::detail {
 

@@ -8,8 +8,8 @@
 #include <limits>
 #include <stdexcept>
 
-#include "bounds.h"
-#include "parallel.h"
+#include "bounds/bounds.h"
+#include "core/parallel.h"
 #include "simd/simd.h"
 
 namespace rubble::detail {
@@ -586,23 +586,6 @@ StaticBvhStats StaticBvh::stats() const {
 
 // ---- Primitives of static bodies ----
 
-std::uint32_t heightfieldTriangleCount(const Heightfield& field) {
-    if (field.rows < 2 || field.columns < 2) return 0;
-    return 2 * (field.rows - 1) * (field.columns - 1);
-}
-
-std::array<Vec3, 3> heightfieldTriangle(const Heightfield& field, std::uint32_t triangle) {
-    const std::uint32_t cell = triangle / 2, cellsPerRow = field.columns - 1;
-    const std::uint32_t r = cell / cellsPerRow, c = cell % cellsPerRow;
-    auto sample = [&](std::uint32_t row, std::uint32_t col) {
-        return Vec3{float(col) * field.spacingX, field.heights[std::size_t(row) * field.columns + col],
-                    float(row) * field.spacingZ};
-    };
-    const Vec3 p00 = sample(r, c), p10 = sample(r, c + 1), p01 = sample(r + 1, c), p11 = sample(r + 1, c + 1);
-    if ((triangle & 1) == 0) return {p00, p01, p11};
-    return {p00, p11, p10};
-}
-
 namespace {
 
 Aabb triangleBox(Vec3 a, Vec3 b, Vec3 c) {
@@ -631,9 +614,7 @@ void appendStaticPrimitives(const Shape& shape, const Transform& pose, std::uint
         auto posedRow = [&](std::uint32_t row, std::vector<Vec3>& dst) {
             dst.resize(field.columns);
             for (std::uint32_t col = 0; col < field.columns; ++col)
-                dst[col] =
-                    apply(pose, {float(col) * field.spacingX, field.heights[std::size_t(row) * field.columns + col],
-                                 float(row) * field.spacingZ});
+                dst[col] = apply(pose, heightfieldSample(field, row, col));
         };
         std::vector<Vec3> row0, row1;
         posedRow(0, row0);

@@ -19,21 +19,17 @@
 // its hits are those kept hits that overlap it: exactly the tree walk's answer (a primitive is reported when its
 // own box overlaps, and every ancestor's box holds its box), found without the walk's cache misses. Resting piles
 // walk the tree almost never.
-//
-// Heightfield triangle numbering (shared with the narrow phase through heightfieldTriangle()): the cell at row r
-// (z) and column c (x) is split along its (x0, z0)-(x1, z1) diagonal into triangle 2 * (r * (columns - 1) + c) + k,
-// k = 0: (p00, p01, p11) and k = 1: (p00, p11, p10), where p<dx><dz> is the sample at column c + dx, row r + dz.
-// Both are counter-clockwise seen from +y, the split and order of heightfieldHeightAt and of generated terrains.
+// A heightfield's primitives are its triangles, numbered as src/shapes/shape.h says (heightfieldTriangle).
 #include <array>
 #include <bit>
 #include <cstdint>
 #include <span>
 #include <vector>
 
-#include "aligned_vector.h"
 #include "broadphase/broadphase.h"
 #include "rubble/math.h"
 #include "shapes/shape.h"
+#include "storage/aligned_vector.h"
 
 namespace rubble::detail {
 
@@ -176,10 +172,5 @@ private:
 /// heightfields, one world box (kWholeBody) for any other shape. `pose` takes the shape frame to the world.
 void appendStaticPrimitives(const Shape& shape, const Transform& pose, std::uint32_t body,
                             std::vector<StaticPrimitive>& out);
-
-/// Number of triangles of a heightfield: 2 (rows - 1) (columns - 1).
-std::uint32_t heightfieldTriangleCount(const Heightfield& field);
-/// Vertices of a heightfield triangle in the shape frame, numbered as described at the top of this file.
-std::array<Vec3, 3> heightfieldTriangle(const Heightfield& field, std::uint32_t triangle);
 
 }  // namespace rubble::detail

@@ -8,7 +8,7 @@
 #include <cstring>
 #include <limits>
 
-#include "parallel.h"
+#include "core/parallel.h"
 #include "simd/simd.h"
 
 namespace rubble::detail {

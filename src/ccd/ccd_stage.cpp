@@ -4,11 +4,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include "bounds.h"
+#include "bounds/bounds.h"
 #include "broadphase/broadphase.h"
 #include "broadphase/static_bvh.h"
 #include "ccd/time_of_impact.h"
-#include "parallel.h"
+#include "core/parallel.h"
 #include "query/tree_queries.h"
 
 namespace rubble::detail {

@@ -16,9 +16,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "body_storage.h"
 #include "rubble/math.h"
 #include "shapes/shape.h"
+#include "storage/body_storage.h"
 
 namespace rubble::detail {
 

@@ -4,8 +4,8 @@
 // Positions are computed relative to one of the bodies and only the final contact point adds the world position
 // back, so pairs 10 km from the origin lose no more than the rounding of their own coordinates.
 #if defined(__GNUC__) && !defined(__clang__)
-// GCC's SLP vectoriser may fuse alternating +/- lanes even under -ffp-contract=off (see src/integrate.cpp), and its
-// loop vectoriser would turn the scalar reference into a second SIMD path; the wide kernels are explicit SIMD.
+// GCC's SLP vectoriser may fuse alternating +/- lanes even under -ffp-contract=off (see src/integrate/integrate.cpp),
+// and its loop vectoriser would turn the scalar reference into a second SIMD path; the wide kernels are explicit SIMD.
 #pragma GCC optimize("no-tree-slp-vectorize", "no-tree-loop-vectorize")
 #endif
 #include "narrowphase/convex_pairs.h"

@@ -3,8 +3,8 @@
 
 #include <algorithm>
 
+#include "contacts/contacts.h"
 #include "narrowphase/clip.h"
-#include "narrowphase/narrowphase_stage.h"
 #include "narrowphase/triangle_pairs.h"
 
 namespace rubble::detail {

@@ -4,15 +4,15 @@
 #include <cassert>
 #include <tuple>
 
-#include "bounds.h"
+#include "bounds/bounds.h"
 #include "broadphase/static_bvh.h"
+#include "core/parallel.h"
 #include "narrowphase/box_box.h"
 #include "narrowphase/convex_pairs.h"
 #include "narrowphase/hull_pairs.h"
 #include "narrowphase/mesh_manifolds.h"
 #include "narrowphase/triangle_pairs.h"
 #include "narrowphase/triangle_reach.h"
-#include "parallel.h"
 #include "shapes/mesh_adjacency.h"
 #include "simd/simd.h"
 #include "simd/transpose.h"

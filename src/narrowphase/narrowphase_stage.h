@@ -11,46 +11,19 @@
 #include <unordered_map>
 #include <vector>
 
-#include "body_storage.h"
 #include "broadphase/broadphase.h"
+#include "contacts/contacts.h"
 #include "narrowphase/manifold.h"
 #include "narrowphase/manifold_reuse.h"
 #include "shapes/shape.h"
+#include "storage/body_storage.h"
 
 namespace rubble::detail {
 
 class TaskPool;
 struct HullAdjacency;
 
-inline constexpr std::uint16_t kNoChild = 0xFFFF;
 inline constexpr int kShapeKindCount = static_cast<int>(ShapeKind::Heightfield) + 1;
-
-/// The two bodies of a manifold, in the order the kernel saw them: A has the lower ShapeKind, so the normal
-/// points from A to B. Each side is a dense index into MovingBodies, or into StaticBodies when flagged static;
-/// for a compound, `childA` / `childB` name the child whose shape made the contact.
-struct ContactPair {
-    std::uint32_t a = 0;
-    std::uint32_t b = 0;
-    bool aStatic = false;
-    bool bStatic = false;
-    /// For a body against a static mesh or heightfield (B): the triangle; ~0u otherwise.
-    std::uint32_t triangle = ~0u;
-    std::uint16_t childA = kNoChild;
-    std::uint16_t childB = kNoChild;
-};
-
-/// The stage's output: one manifold (with at least one point) per touching or nearly touching pair.
-struct Contacts {
-    std::vector<ContactPair> pairs;
-    std::vector<Manifold> manifolds;
-    std::uint32_t pointCount = 0;
-
-    void clear() {
-        pairs.clear();
-        manifolds.clear();
-        pointCount = 0;
-    }
-};
 
 /// Shape-pair kinds that have a kernel. The lower ShapeKind comes first.
 enum class PairKernel : std::uint8_t {
@@ -81,7 +54,7 @@ struct ShapeTables {
     std::vector<ShapeKind> kind;
     /// Box: half extents; sphere: (radius, 0, 0); capsule: (radius, half height, 0).
     std::vector<float> sizeX, sizeY, sizeZ;
-    std::vector<float> reach;  ///< rotationReach (src/bounds.h)
+    std::vector<float> reach;  ///< rotationReach (src/bounds/bounds.h)
 };
 
 /// Each moving body's pose and motion as two rows of eight floats (simd/transpose.h), copied from the SoA storage at
@@ -110,8 +83,8 @@ public:
     /// of bodies A and B
     ///     m = margin + |vB - vA| dt + min(|wA| dt, 2) reachA + min(|wB| dt, 2) reachB
     /// bounds how far their surfaces can approach each other during the step (reach: rotationReach of the body's
-    /// shape, src/bounds.h, which the broad phase's boxes are grown by as well; static bodies have no velocity). A
-    /// resting pair keeps the plain margin; a fast approach gets its points before the bodies meet, so the solver can
+    /// shape, src/bounds/bounds.h, which the broad phase's boxes are grown by as well; static bodies have no velocity).
+    /// A resting pair keeps the plain margin; a fast approach gets its points before the bodies meet, so the solver can
     /// stop it in time.
     void run(const CandidatePairs& candidates, const BodyStorage& storage, const std::vector<Shape>& shapes,
              const NarrowPhaseParams& params, TaskPool& pool, Contacts& out);

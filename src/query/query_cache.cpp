@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "query/tree_queries.h"
-#include "world_impl.h"
+#include "world/world_impl.h"
 
 namespace rubble::detail {
 namespace {

@@ -7,13 +7,13 @@
 #include <string>
 #include <vector>
 
-#include "bounds.h"
+#include "bounds/bounds.h"
 #include "query/query_cache.h"
 #include "query/ray_cast.h"
 #include "query/shape_cast.h"
 #include "query/tree_queries.h"
 #include "rubble/error.h"
-#include "world_impl.h"
+#include "world/world_impl.h"
 
 namespace rubble {
 namespace {

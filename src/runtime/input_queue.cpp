@@ -3,7 +3,7 @@
 #include <type_traits>
 
 #include "rubble/error.h"
-#include "validation.h"
+#include "world/validation.h"
 
 namespace rubble::detail {
 

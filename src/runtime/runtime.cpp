@@ -16,7 +16,7 @@
 #include "runtime/snapshot.h"
 #include "runtime/snapshot_buffer.h"
 #include "runtime/step_clock.h"
-#include "world_impl.h"
+#include "world/world_impl.h"
 
 namespace rubble {
 

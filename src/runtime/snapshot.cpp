@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "simd/simd.h"
-#include "world_access.h"
+#include "world/world_access.h"
 
 namespace rubble {
 namespace detail {

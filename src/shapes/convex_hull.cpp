@@ -12,7 +12,7 @@
 
 #include "rubble/error.h"
 #include "shapes/shape.h"
-#include "validation.h"
+#include "world/validation.h"
 
 #include <libqhull_r/qhull_ra.h>
 

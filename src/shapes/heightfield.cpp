@@ -6,7 +6,7 @@
 
 #include "rubble/error.h"
 #include "shapes/shape.h"
-#include "validation.h"
+#include "world/validation.h"
 
 namespace rubble::detail {
 
@@ -56,16 +56,27 @@ std::optional<float> heightfieldHeightAt(const Heightfield& field, float x, floa
         return std::nullopt;  // also refuses NaN
     const auto c = std::uint32_t(std::clamp(std::floor(fx), 0.0, double(field.columns - 2)));
     const auto r = std::uint32_t(std::clamp(std::floor(fz), 0.0, double(field.rows - 2)));
-    auto sample = [&](std::uint32_t row, std::uint32_t col) {
-        return Vec3{float(col) * field.spacingX, field.heights[std::size_t(row) * field.columns + col],
-                    float(row) * field.spacingZ};
-    };
-    const Vec3 p00 = sample(r, c), p10 = sample(r, c + 1), p01 = sample(r + 1, c), p11 = sample(r + 1, c + 1);
+    const Vec3 p00 = heightfieldSample(field, r, c), p10 = heightfieldSample(field, r, c + 1);
+    const Vec3 p01 = heightfieldSample(field, r + 1, c), p11 = heightfieldSample(field, r + 1, c + 1);
     // Counter-clockwise seen from above, like a mesh exported from the same grid.
     std::optional<float> best = triangleHeightAt(p00, p01, p11, x, z);
     const std::optional<float> other = triangleHeightAt(p00, p11, p10, x, z);
     if (other && (!best || *other > *best)) best = other;
     return best;
+}
+
+std::uint32_t heightfieldTriangleCount(const Heightfield& field) {
+    if (field.rows < 2 || field.columns < 2) return 0;
+    return 2 * (field.rows - 1) * (field.columns - 1);
+}
+
+std::array<Vec3, 3> heightfieldTriangle(const Heightfield& field, std::uint32_t triangle) {
+    const std::uint32_t cell = triangle / 2, cellsPerRow = field.columns - 1;
+    const std::uint32_t r = cell / cellsPerRow, c = cell % cellsPerRow;
+    const Vec3 p00 = heightfieldSample(field, r, c), p10 = heightfieldSample(field, r, c + 1);
+    const Vec3 p01 = heightfieldSample(field, r + 1, c), p11 = heightfieldSample(field, r + 1, c + 1);
+    if ((triangle & 1) == 0) return {p00, p01, p11};
+    return {p00, p11, p10};
 }
 
 }  // namespace rubble::detail

@@ -7,7 +7,7 @@
 
 #include "rubble/error.h"
 #include "shapes/shape.h"
-#include "validation.h"
+#include "world/validation.h"
 
 namespace rubble::detail {
 

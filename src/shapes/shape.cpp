@@ -2,7 +2,7 @@
 // later stage has to distrust a Shape; the heavy work (hulls, mesh grids, mass integration) lives in the
 // neighbouring files.
 #include "shapes/shape.h"
-#include "validation.h"
+#include "world/validation.h"
 
 #include <algorithm>
 #include <cmath>

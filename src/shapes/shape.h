@@ -124,4 +124,20 @@ std::optional<float> triangleHeightAt(Vec3 a, Vec3 b, Vec3 c, float x, float z);
 std::optional<float> meshHeightAt(const TriangleMesh& mesh, float x, float z);
 std::optional<float> heightfieldHeightAt(const Heightfield& field, float x, float z);
 
+// Heightfield triangle numbering (the static tree, the narrow phase, debug draw and the mesh adjacency all use it):
+// the cell at row r (z) and column c (x) is split along its (x0, z0)-(x1, z1) diagonal into triangle
+// 2 * (r * (columns - 1) + c) + k, k = 0: (p00, p01, p11) and k = 1: (p00, p11, p10), where p<dx><dz> is the sample
+// at column c + dx, row r + dz. Both are counter-clockwise seen from +y, the split and order of heightfieldHeightAt
+// and of generated terrains.
+
+/// The sample at (row, column) in the shape frame.
+inline Vec3 heightfieldSample(const Heightfield& field, std::uint32_t row, std::uint32_t column) {
+    return Vec3{float(column) * field.spacingX, field.heights[std::size_t(row) * field.columns + column],
+                float(row) * field.spacingZ};
+}
+/// Number of triangles of a heightfield: 2 (rows - 1) (columns - 1).
+std::uint32_t heightfieldTriangleCount(const Heightfield& field);
+/// Vertices of a heightfield triangle in the shape frame.
+std::array<Vec3, 3> heightfieldTriangle(const Heightfield& field, std::uint32_t triangle);
+
 }  // namespace rubble::detail

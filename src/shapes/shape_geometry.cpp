@@ -4,7 +4,7 @@
 
 #include "broadphase/static_bvh.h"
 #include "rubble/world.h"
-#include "world_impl.h"
+#include "world/world_impl.h"
 
 namespace rubble {
 

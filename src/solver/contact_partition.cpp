@@ -10,7 +10,7 @@
 #include <bit>
 #include <cmath>
 
-#include "islands.h"
+#include "islands/islands.h"
 
 namespace rubble::detail {
 namespace {

@@ -6,8 +6,8 @@
 #include <cstddef>
 #include <cstring>
 
-#include "islands.h"
-#include "parallel.h"
+#include "core/parallel.h"
+#include "islands/islands.h"
 
 namespace rubble::detail {
 namespace {

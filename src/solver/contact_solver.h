@@ -23,13 +23,13 @@
 #include <limits>
 #include <vector>
 
-#include "aligned_vector.h"
-#include "body_storage.h"
-#include "contacts.h"
-#include "narrowphase/narrowphase_stage.h"
-#include "parallel.h"
+#include "contacts/contact_cache.h"
+#include "contacts/contacts.h"
+#include "core/parallel.h"
 #include "rubble/settings.h"
 #include "solver/contact_batch.h"
+#include "storage/aligned_vector.h"
+#include "storage/body_storage.h"
 
 namespace rubble::detail {
 

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "islands.h"
-#include "parallel.h"
+#include "core/parallel.h"
+#include "islands/islands.h"
 
 namespace rubble::detail {
 namespace {

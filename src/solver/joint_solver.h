@@ -20,10 +20,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "body_storage.h"
-#include "joint_storage.h"
 #include "rubble/settings.h"
 #include "solver/contact_solver.h"
+#include "storage/body_storage.h"
+#include "storage/joint_storage.h"
 
 namespace rubble::detail {
 

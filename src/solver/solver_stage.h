@@ -4,13 +4,13 @@
 // ContactSolver's and JointSolver's; this is the order they run in (docs/architecture.md, "The step").
 #include <vector>
 
-#include "body_storage.h"
-#include "contacts.h"
-#include "islands.h"
-#include "joint_storage.h"
+#include "contacts/contact_cache.h"
+#include "islands/islands.h"
 #include "solver/contact_solver.h"
 #include "solver/joint_solver.h"
-#include "step_context.h"
+#include "storage/body_storage.h"
+#include "storage/joint_storage.h"
+#include "world/step_context.h"
 
 namespace rubble::detail {
 

@@ -8,10 +8,10 @@
 #include <optional>
 #include <random>
 
-#include "body_storage.h"
-#include "bounds.h"
+#include "bounds/bounds.h"
 #include "broadphase/broadphase_stage.h"
-#include "parallel.h"
+#include "core/parallel.h"
+#include "storage/body_storage.h"
 #include "support/broadphase_scenarios.h"
 
 using namespace rubble;

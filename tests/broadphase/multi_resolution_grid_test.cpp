@@ -11,7 +11,7 @@
 #include <random>
 #include <vector>
 
-#include "parallel.h"
+#include "core/parallel.h"
 #include "support/broadphase_scenarios.h"
 
 namespace rubble::detail {

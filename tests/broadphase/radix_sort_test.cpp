@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "broadphase/radix_sort.h"
-#include "parallel.h"
+#include "core/parallel.h"
 
 namespace {
 

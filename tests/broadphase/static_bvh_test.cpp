@@ -15,7 +15,7 @@
 #include <tuple>
 #include <vector>
 
-#include "parallel.h"
+#include "core/parallel.h"
 #include "scene/generators.h"
 #include "shapes/shape.h"
 

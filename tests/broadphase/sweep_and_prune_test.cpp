@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "broadphase/sweep_and_prune.h"
-#include "parallel.h"
+#include "core/parallel.h"
 #include "support/broadphase_scenarios.h"
 
 namespace {

@@ -52,9 +52,9 @@
 #include <tuple>
 #include <vector>
 
-#include "body_storage.h"
-#include "bounds.h"
+#include "bounds/bounds.h"
 #include "broadphase/broadphase_stage.h"
+#include "core/parallel.h"
 #include "narrowphase/ccd_oracle.h"
 #include "narrowphase/gjk.h"
 #include "narrowphase/hull_pairs.h"
@@ -62,9 +62,9 @@
 #include "narrowphase/narrowphase_stage.h"
 #include "narrowphase/triangle_pairs.h"
 #include "narrowphase/triangle_test_helpers.h"
-#include "parallel.h"
 #include "shapes/mesh_adjacency.h"
 #include "shapes/shape.h"
+#include "storage/body_storage.h"
 #include "support/stage_scene.h"
 #include "support/test_shapes.h"
 

@@ -9,12 +9,12 @@
 #include <random>
 #include <unordered_map>
 
-#include "body_storage.h"
-#include "bounds.h"
+#include "bounds/bounds.h"
 #include "broadphase/broadphase_stage.h"
+#include "core/parallel.h"
 #include "narrowphase/gjk.h"
 #include "narrowphase/narrowphase_stage.h"
-#include "parallel.h"
+#include "storage/body_storage.h"
 #include "support/random_poses.h"
 #include "support/stage_scene.h"
 #include "support/test_shapes.h"

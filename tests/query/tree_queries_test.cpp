@@ -14,7 +14,7 @@
 #include <set>
 #include <vector>
 
-#include "parallel.h"
+#include "core/parallel.h"
 #include "query/query_reference.h"
 
 namespace rubble::detail {

@@ -12,8 +12,8 @@
 #include <random>
 #include <vector>
 
-#include "aligned_vector.h"
 #include "simd/transpose.h"
+#include "storage/aligned_vector.h"
 
 namespace rubble {
 namespace {

@@ -9,15 +9,15 @@
 #include <random>
 #include <set>
 
-#include "islands.h"
-#include "parallel.h"
+#include "core/parallel.h"
+#include "islands/islands.h"
 #include "rubble/build_info.h"
 #include "rubble/world.h"
 #include "solver/contact_batch.h"
 #include "solver/contact_solver.h"
 #include "solver/joint_solver.h"
 #include "support/contact_batches.h"
-#include "world_access.h"
+#include "world/world_access.h"
 
 namespace rubble {
 namespace {

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "joint_storage.h"
 #include "rubble/world.h"
+#include "storage/joint_storage.h"
 #include "support/error_of.h"
 
 namespace rubble {

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <vector>
 
-#include "parallel.h"
-#include "solver/resting_loads.h"
+#include "contacts/resting_loads.h"
+#include "core/parallel.h"
 
 using namespace rubble;
 using namespace rubble::detail;

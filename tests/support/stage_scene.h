@@ -4,12 +4,12 @@
 #include <cstdint>
 #include <vector>
 
-#include "body_storage.h"
-#include "bounds.h"
+#include "bounds/bounds.h"
 #include "broadphase/broadphase_stage.h"
+#include "core/parallel.h"
 #include "narrowphase/narrowphase_stage.h"
-#include "parallel.h"
 #include "shapes/shape.h"
+#include "storage/body_storage.h"
 
 namespace rubble::test {
 

@@ -1,0 +1,37 @@
+#pragma once
+// Update-bounds stage: the world AABB of every moving body, enlarged by its motion over the coming step (linear and
+// rotational) and a contact margin, so that the broad phase finds pairs before they touch (speculative contacts).
+#include <cstdint>
+#include <vector>
+
+#include "broadphase/broadphase.h"
+#include "rubble/math.h"
+#include "shapes/shape.h"
+#include "shapes/shape_extents.h"
+#include "storage/body_storage.h"
+
+namespace rubble::detail {
+
+class TaskPool;
+
+/// Per-shape tables in SoA form, indexed by shape slot, for SIMD gathers.
+struct ShapeBoundsTable {
+    std::vector<float> centerX, centerY, centerZ, halfX, halfY, halfZ, radius, reach, inner;
+    void set(std::uint32_t shape, const ShapeBoundsInfo& info);
+};
+
+struct BoundsParams {
+    /// The step the boxes must cover: each box is swept by velocity * dt and grown by how far the angular velocity
+    /// can turn the shape in dt (|w| dt times its reach, at most twice the reach).
+    float dt = 1.0f / 60.0f;
+    float margin = 0.0f;  ///< added on every side
+};
+
+/// Writes the world boxes of all moving bodies into `out` (resized to the body count).
+void updateBounds(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,
+                  TaskPool& pool, Bounds& out);
+/// The same, one body at a time, as the reference for the SIMD path.
+void updateBoundsScalar(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,
+                        Bounds& out);
+
+}  // namespace rubble::detail

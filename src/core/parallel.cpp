@@ -1,0 +1,128 @@
+#include "core/parallel.h"
+
+#include <algorithm>
+#include <thread>
+
+#if RUBBLE_STD_THREADS
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
+#include <vector>
+#else
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
+#include <tbb/task_arena.h>
+#endif
+
+#include "simd/float_mode.h"
+
+namespace rubble::detail {
+
+#if !RUBBLE_STD_THREADS
+
+struct TaskPool::Arena {
+    tbb::task_arena arena;
+    explicit Arena(int threads) : arena(threads) {}
+
+    void run(std::size_t chunks, FunctionRef<void(std::size_t, int)> chunk) {
+        arena.execute([&] {
+            tbb::parallel_for(
+                tbb::blocked_range<std::size_t>(0, chunks, 1),
+                [&](const tbb::blocked_range<std::size_t>& r) {
+                    // The engine's float mode, on every thread (simd/float_mode.h).
+                    const simd::FlushSubnormals flushSubnormals;
+                    const int worker = tbb::this_task_arena::current_thread_index();
+                    for (std::size_t c = r.begin(); c != r.end(); ++c) chunk(c, worker);
+                },
+                tbb::simple_partitioner());
+        });
+    }
+};
+
+#else
+
+/// ThreadSanitizer cannot see the synchronisation inside Debian's uninstrumented libtbb and reports races in
+/// its task ranges. Under TSan the pool is this plain std::thread one instead, with the same chunks, so that
+/// what TSan checks is Rubble's own code.
+struct TaskPool::Arena {
+    explicit Arena(int threads) {
+        for (int w = 1; w < threads; ++w) workers.emplace_back([this, w] { workerLoop(w); });
+    }
+    ~Arena() {
+        {
+            std::lock_guard lock(mutex);
+            stopping = true;
+        }
+        wake.notify_all();
+        for (std::thread& t : workers) t.join();
+    }
+
+    void run(std::size_t chunks, FunctionRef<void(std::size_t, int)> chunk) {
+        std::unique_lock lock(mutex);
+        job = &chunk;
+        jobChunks = chunks;
+        next.store(0);
+        busy = static_cast<int>(workers.size());
+        ++generation;
+        lock.unlock();
+        wake.notify_all();
+        drain(chunk, 0);
+        lock.lock();
+        done.wait(lock, [&] { return busy == 0; });
+        job = nullptr;
+    }
+
+    void drain(FunctionRef<void(std::size_t, int)> chunk, int worker) {
+        const simd::FlushSubnormals flushSubnormals;  // the engine's mode, on every thread (simd/float_mode.h)
+        for (std::size_t c = next.fetch_add(1); c < jobChunks; c = next.fetch_add(1)) chunk(c, worker);
+    }
+
+    void workerLoop(int worker) {
+        std::uint64_t seen = 0;
+        std::unique_lock lock(mutex);
+        for (;;) {
+            wake.wait(lock, [&] { return stopping || generation != seen; });
+            if (stopping) return;
+            seen = generation;
+            FunctionRef<void(std::size_t, int)> chunk = *job;
+            lock.unlock();
+            drain(chunk, worker);
+            lock.lock();
+            if (--busy == 0) done.notify_one();
+        }
+    }
+
+    std::vector<std::thread> workers;
+    std::mutex mutex;
+    std::condition_variable wake, done;
+    const FunctionRef<void(std::size_t, int)>* job = nullptr;
+    std::size_t jobChunks = 0;
+    std::atomic<std::size_t> next{0};
+    std::uint64_t generation = 0;
+    int busy = 0;
+    bool stopping = false;
+};
+
+#endif
+
+TaskPool::TaskPool(int threads)
+    : threads_(threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))),
+      arena_(std::make_unique<Arena>(threads_)) {}
+
+TaskPool::~TaskPool() = default;
+
+void TaskPool::forChunks(std::size_t count, std::size_t chunkSize,
+                         FunctionRef<void(std::size_t, std::size_t, std::size_t, int)> fn) {
+    const std::size_t chunks = chunkCount(count, chunkSize);
+    if (chunks == 0) return;
+    if (chunks == 1 || threads_ == 1) {
+        const simd::FlushSubnormals flushSubnormals;  // as every worker does, whoever calls
+        for (std::size_t c = 0; c < chunks; ++c) fn(c, c * chunkSize, std::min(count, (c + 1) * chunkSize), 0);
+        return;
+    }
+    auto chunk = [&](std::size_t c, int worker) { fn(c, c * chunkSize, std::min(count, (c + 1) * chunkSize), worker); };
+    arena_->run(chunks, chunk);
+}
+
+}  // namespace rubble::detail

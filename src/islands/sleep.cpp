@@ -1,0 +1,206 @@
+#include "islands/sleep.h"
+
+#include <algorithm>
+#include <atomic>
+
+#include "core/parallel.h"
+
+namespace rubble::detail {
+namespace {
+
+constexpr std::size_t kBodyChunk = 4096;
+constexpr std::size_t kManifoldChunk = 2048;
+constexpr std::size_t kIslandChunk = 1024;
+
+bool movingKinematic(const MovingBodies& m, std::uint32_t i) {
+    return (m.flags[i] & kFlagKinematic) != 0 &&
+           (m.vx[i] != 0 || m.vy[i] != 0 || m.vz[i] != 0 || m.wx[i] != 0 || m.wy[i] != 0 || m.wz[i] != 0);
+}
+
+std::uint32_t slotOf(const BodyStorage& s, std::uint32_t dense, bool isStatic) {
+    return isStatic ? s.statics.slot[dense] : s.moving.slot[dense];
+}
+
+/// Runs pick(k) over the islands in parallel chunks and returns the picked ones in island order.
+template <class Pick>
+void pickIslands(std::uint32_t islands, TaskPool& pool, std::vector<std::vector<std::uint32_t>>& perChunk,
+                 std::vector<std::uint32_t>& out, Pick&& pick) {
+    perChunk.resize(TaskPool::chunkCount(islands, kIslandChunk));
+    pool.forChunks(islands, kIslandChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
+        perChunk[c].clear();
+        for (std::size_t k = begin; k < end; ++k)
+            if (pick(static_cast<std::uint32_t>(k))) perChunk[c].push_back(static_cast<std::uint32_t>(k));
+    });
+    out.clear();
+    for (const auto& c : perChunk) out.insert(out.end(), c.begin(), c.end());
+}
+
+}  // namespace
+
+void SleepingIslands::linkSleepingIslands(const BodyStorage& storage, std::vector<IslandEdge>& edges) const {
+    if (sleepingBodies_ == 0) return;
+    const auto& slots = storage.slots();
+    for (std::uint32_t index = 0; index < groups_.size(); ++index) {
+        if (!groupIds_.alive(index)) continue;
+        const Group& g = groups_[index];
+        const std::uint32_t first = slots[g.slots[0]].dense;
+        for (std::size_t k = 1; k < g.slots.size(); ++k) edges.emplace_back(first, slots[g.slots[k]].dense);
+    }
+}
+
+bool SleepingIslands::wakeTouched(const Islands& islands, BodyStorage& storage, IntegrationScratch& integration,
+                                  Contacts& contacts, std::vector<PointImpulse>& impulses, ContactCache& cache,
+                                  TaskPool& pool) {
+    MovingBodies& m = storage.moving;
+    const std::uint32_t count = islands.count();
+    touchedByKinematic_.assign(count, 0);
+    pool.forChunks(contacts.pairs.size(), kManifoldChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const ContactPair& p = contacts.pairs[k];
+            if (p.aStatic || p.bStatic) continue;
+            std::uint32_t island = kNoIsland;
+            if (movingKinematic(m, p.a)) island = islands.islandOf[p.b];
+            if (movingKinematic(m, p.b)) island = islands.islandOf[p.a];
+            // Several manifolds may mark one island; they all store the same value.
+            if (island != kNoIsland)
+                std::atomic_ref<std::uint8_t>(touchedByKinematic_[island]).store(1, std::memory_order_relaxed);
+        }
+    });
+    if (sleepingBodies_ == 0) return false;
+
+    std::vector<std::uint32_t> waking;
+    pickIslands(count, pool, chunkIslands_, waking, [&](std::uint32_t k) {
+        bool asleep = false, awake = false;
+        for (std::uint32_t at = islands.bodyStart[k]; at < islands.bodyStart[k + 1]; ++at)
+            ((m.flags[islands.bodies[at]] & kFlagAsleep) ? asleep : awake) = true;
+        return asleep && (awake || touchedByKinematic_[k]);
+    });
+    if (waking.empty()) return false;
+    // Integrate velocities skipped the sleeping bodies in this step: the non-default integrators' offsets are stale.
+    if (integration.dx.size() == m.size())
+        for (std::uint32_t k : waking)
+            for (std::uint32_t at = islands.bodyStart[k]; at < islands.bodyStart[k + 1]; ++at) {
+                const std::uint32_t i = islands.bodies[at];
+                if (!(m.flags[i] & kFlagAsleep)) continue;
+                integration.dx[i] = integration.dy[i] = integration.dz[i] = 0;
+                integration.ex[i] = integration.ey[i] = integration.ez[i] = 0;
+            }
+    restored_.clear();
+    for (std::uint32_t k : waking)
+        for (std::uint32_t at = islands.bodyStart[k]; at < islands.bodyStart[k + 1]; ++at) {
+            const std::uint32_t i = islands.bodies[at];
+            if (m.flags[i] & kFlagAsleep) wakeGroup(m.sleepGroup[i], storage, restored_);
+        }
+    cache.restoreIntoStep(restored_, storage, contacts, impulses);
+    return !restored_.empty();
+}
+
+void SleepingIslands::fallAsleep(const Islands& islands, const Contacts& contacts,
+                                 const std::vector<PointImpulse>& impulses, const ContactCache& cache,
+                                 BodyStorage& storage, const ShapeBoundsTable& shapes, const SleepSettings& settings,
+                                 float dt, TaskPool& pool) {
+    MovingBodies& m = storage.moving;
+    const std::uint32_t count = islands.count();
+    if (touchedByKinematic_.size() != count) touchedByKinematic_.assign(count, 0);
+    const float linearSq = settings.linearThreshold * settings.linearThreshold;
+    const float angularSq = settings.angularThreshold * settings.angularThreshold;
+    pool.forChunks(m.size(), kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const std::uint32_t island = islands.islandOf[i];
+            if (island == kNoIsland || (m.flags[i] & kFlagAsleep)) continue;
+            const float v = m.vx[i] * m.vx[i] + m.vy[i] * m.vy[i] + m.vz[i] * m.vz[i];
+            const float w = m.wx[i] * m.wx[i] + m.wy[i] * m.wy[i] + m.wz[i] * m.wz[i];
+            const float reach = shapes.reach[m.shape[i]];
+            const bool rests = v < linearSq && w < angularSq && w * reach * reach < linearSq &&
+                               (m.flags[i] & kFlagNoSleep) == 0 && !touchedByKinematic_[island];
+            m.sleepTimer[i] = rests ? m.sleepTimer[i] + dt : 0.0f;
+        }
+    });
+    std::vector<std::uint32_t> sleeping;
+    pickIslands(count, pool, chunkIslands_, sleeping, [&](std::uint32_t k) {
+        for (std::uint32_t at = islands.bodyStart[k]; at < islands.bodyStart[k + 1]; ++at) {
+            const std::uint32_t i = islands.bodies[at];
+            if ((m.flags[i] & kFlagAsleep) || m.sleepTimer[i] < settings.timeToSleep) return false;
+        }
+        return true;
+    });
+    for (std::uint32_t k : sleeping) {
+        const std::uint32_t g = groupIds_.acquire().index;
+        if (g == groups_.size()) groups_.emplace_back();
+        Group& group = groups_[g];
+        group.slots.clear();
+        group.manifolds.clear();
+        for (std::uint32_t at = islands.bodyStart[k]; at < islands.bodyStart[k + 1]; ++at) {
+            const std::uint32_t i = islands.bodies[at];
+            m.flags[i] |= kFlagAsleep;
+            m.vx[i] = m.vy[i] = m.vz[i] = m.wx[i] = m.wy[i] = m.wz[i] = 0;
+            m.sleepGroup[i] = g;
+            group.slots.push_back(m.slot[i]);
+        }
+        sleepingBodies_ += islands.bodyStart[k + 1] - islands.bodyStart[k];
+        for (std::uint32_t at = islands.manifoldStart[k]; at < islands.manifoldStart[k + 1]; ++at) {
+            const std::uint32_t c = islands.manifolds[at];
+            const ContactPair& p = contacts.pairs[c];
+            // Pairs with a kinematic (or frozen) body are found again every step: that body is never asleep.
+            if ((!p.aStatic && !joinsIslands(m.flags[p.a])) || (!p.bStatic && !joinsIslands(m.flags[p.b]))) continue;
+            KeptManifold& kept = group.manifolds.emplace_back();
+            kept.key = cache.currentKey(c);
+            kept.pair = p;
+            kept.pair.a = slotOf(storage, p.a, p.aStatic);
+            kept.pair.b = slotOf(storage, p.b, p.bStatic);
+            kept.manifold = contacts.manifolds[c];
+            std::copy_n(impulses.begin() + static_cast<std::ptrdiff_t>(c) * kMaxManifoldPoints, kMaxManifoldPoints,
+                        kept.impulses);
+        }
+    }
+}
+
+void SleepingIslands::wakeGroup(std::uint32_t g, BodyStorage& storage, std::vector<KeptManifold>& out) {
+    if (!groupIds_.alive(g)) return;
+    Group& group = groups_[g];
+    MovingBodies& m = storage.moving;
+    const auto& slots = storage.slots();
+    for (std::uint32_t slot : group.slots) {
+        const std::uint32_t i = slots[slot].dense;
+        m.flags[i] &= static_cast<std::uint8_t>(~kFlagAsleep);
+        m.sleepTimer[i] = 0;
+    }
+    sleepingBodies_ -= static_cast<std::uint32_t>(group.slots.size());
+    out.insert(out.end(), group.manifolds.begin(), group.manifolds.end());
+    group.slots.clear();
+    group.manifolds.clear();
+    groupIds_.release(g);
+}
+
+void SleepingIslands::wake(std::uint32_t dense, BodyStorage& storage) {
+    if (storage.moving.flags[dense] & kFlagAsleep)
+        wakeGroup(storage.moving.sleepGroup[dense], storage, pendingWarmStarts_);
+}
+
+void SleepingIslands::wakeTouching(std::uint32_t slot, BodyStorage& storage, const ContactCache& cache) {
+    if (sleepingBodies_ == 0) return;
+    std::vector<std::uint32_t> partners;
+    cache.partnersOf(slot, partners);
+    for (std::uint32_t g = 0; g < groups_.size(); ++g) {
+        if (!groupIds_.alive(g)) continue;
+        const Group& group = groups_[g];
+        const bool touches = std::any_of(group.manifolds.begin(), group.manifolds.end(),
+                                         [&](const KeptManifold& k) { return k.pair.a == slot || k.pair.b == slot; });
+        if (touches) wakeGroup(g, storage, pendingWarmStarts_);
+    }
+    const auto& slots = storage.slots();
+    for (std::uint32_t p : partners)
+        if (storage.alive(p) && slots[p].set == BodySet::Moving) wake(slots[p].dense, storage);
+}
+
+void SleepingIslands::wakeAll(BodyStorage& storage) {
+    for (std::uint32_t g = 0; g < groups_.size(); ++g) wakeGroup(g, storage, pendingWarmStarts_);
+}
+
+void SleepingIslands::flushWarmStarts(ContactCache& cache) {
+    if (pendingWarmStarts_.empty()) return;
+    cache.restoreForWarmStart(pendingWarmStarts_);
+    pendingWarmStarts_.clear();
+}
+
+}  // namespace rubble::detail

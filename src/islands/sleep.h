@@ -1,0 +1,74 @@
+#pragma once
+// Sleeping per island, the second half of the islands stage (only in scenes that declare Effect::Sleeping).
+//
+// Each dynamic body has a sleep timer: how long it has rested (rubble::SleepSettings). After the step, an island
+// whose bodies have all rested for timeToSleep falls asleep whole: its bodies get the asleep flag and zero
+// velocity, and its manifolds leave the step for a "sleeping island" kept here, with their final impulses. While
+// asleep its bodies are not integrated, the broad phase skips pairs of two sleeping bodies (or a sleeping and a
+// static one), so the narrow phase, the contact cache and the solver never see its contacts.
+//
+// Waking is per island too. In the step, the union-find joins every body of a sleeping island (its members are
+// linked by extra edges), so an awake body that touches one of them lands in the same island; an island that holds
+// an awake body, or touches a moving kinematic body, wakes whole, and its kept manifolds come back into the step's
+// contacts with their impulses, so that a woken stack is solved as it was left. Between steps the API wakes a body's
+// island (forces, impulses, velocities, transforms, removal of a body it rests on); its kept manifolds then go to
+// the contact cache, so that the next step's manifolds warm-start from them.
+#include <cstdint>
+#include <vector>
+
+#include "bounds/bounds.h"
+#include "contacts/contact_cache.h"
+#include "integrate/integrate.h"
+#include "islands/islands.h"
+#include "rubble/settings.h"
+#include "storage/slot_map.h"
+
+namespace rubble::detail {
+
+class TaskPool;
+
+class SleepingIslands {
+public:
+    /// Appends the edges that hold each sleeping island together (dense indices) to `edges`.
+    void linkSleepingIslands(const BodyStorage& storage, std::vector<IslandEdge>& edges) const;
+    /// In the step, after the islands are built: an island that holds a sleeping body wakes whole when it also holds
+    /// an awake body or touches a moving kinematic body. The kept manifolds of woken islands are appended to this
+    /// step's contacts and impulses. Returns whether any were, in which case the islands' manifold rows are stale.
+    bool wakeTouched(const Islands& islands, BodyStorage& storage, IntegrationScratch& integration, Contacts& contacts,
+                     std::vector<PointImpulse>& impulses, ContactCache& cache, TaskPool& pool);
+    /// After the step: sleep timers, and islands that have rested for timeToSleep fall asleep, their manifolds kept.
+    void fallAsleep(const Islands& islands, const Contacts& contacts, const std::vector<PointImpulse>& impulses,
+                    const ContactCache& cache, BodyStorage& storage, const ShapeBoundsTable& shapes,
+                    const SleepSettings& settings, float dt, TaskPool& pool);
+
+    /// Between steps: wakes the sleeping island of moving body `dense` (nothing if it is awake).
+    void wake(std::uint32_t dense, BodyStorage& storage);
+    /// Between steps: wakes the sleeping islands that touch body `slot` (about to be removed or moved), found among
+    /// the kept manifolds and last step's contacts.
+    void wakeTouching(std::uint32_t slot, BodyStorage& storage, const ContactCache& cache);
+    /// Wakes every sleeping island (the Sleeping effect was turned off).
+    void wakeAll(BodyStorage& storage);
+    /// At the start of a step: the kept manifolds of islands woken between steps go to the contact cache.
+    void flushWarmStarts(ContactCache& cache);
+
+    std::uint32_t sleepingBodies() const { return sleepingBodies_; }
+
+private:
+    struct Group {
+        std::vector<std::uint32_t> slots;  ///< its bodies
+        std::vector<KeptManifold> manifolds;
+    };
+    using GroupId = Handle<Group>;
+    /// Wakes group g and appends its kept manifolds to `out`.
+    void wakeGroup(std::uint32_t g, BodyStorage& storage, std::vector<KeptManifold>& out);
+
+    SlotMap<GroupId> groupIds_;
+    std::vector<Group> groups_;  ///< by group slot
+    std::vector<KeptManifold> pendingWarmStarts_;
+    std::vector<std::uint8_t> touchedByKinematic_;  ///< per island of the step: touches a moving kinematic body
+    std::vector<std::vector<std::uint32_t>> chunkIslands_;
+    std::vector<KeptManifold> restored_;
+    std::uint32_t sleepingBodies_ = 0;
+};
+
+}  // namespace rubble::detail

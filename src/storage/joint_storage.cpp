@@ -1,0 +1,76 @@
+#include "storage/joint_storage.h"
+
+#include <algorithm>
+
+namespace rubble::detail {
+
+JointId JointStore::add(const Joint& joint) {
+    const JointId id = ids_.acquire();
+    const std::uint32_t slot = id.index;
+    if (slot == denseOfSlot_.size()) denseOfSlot_.push_back(0);
+    denseOfSlot_[slot] = static_cast<std::uint32_t>(joints_.size());
+    joints_.push_back(joint);
+    joints_.back().slot = slot;
+    if (joint.broken) brokenCount_ += 1;
+    for (BodyId body : {joint.bodyA, joint.bodyB}) {
+        if (body.index >= jointsOfBody_.size()) jointsOfBody_.resize(body.index + 1);
+        jointsOfBody_[body.index].push_back(slot);
+    }
+    return id;
+}
+
+void JointStore::unlink(std::uint32_t bodySlot, std::uint32_t jointSlot) {
+    std::vector<std::uint32_t>& list = jointsOfBody_[bodySlot];
+    const auto it = std::find(list.begin(), list.end(), jointSlot);
+    if (it != list.end()) list.erase(it);
+}
+
+void JointStore::remove(JointId id) {
+    const Joint* joint = find(id);
+    if (!joint) return;
+    const std::uint32_t dense = denseOfSlot_[id.index];
+    unlink(joint->bodyA.index, id.index);
+    unlink(joint->bodyB.index, id.index);
+    if (joint->broken) brokenCount_ -= 1;
+    const std::uint32_t last = size() - 1;
+    if (dense != last) {
+        joints_[dense] = joints_[last];
+        denseOfSlot_[joints_[dense].slot] = dense;
+    }
+    joints_.pop_back();
+    ids_.release(id.index);
+}
+
+Joint* JointStore::find(JointId id) { return const_cast<Joint*>(static_cast<const JointStore*>(this)->find(id)); }
+
+const Joint* JointStore::find(JointId id) const {
+    return ids_.contains(id) ? &joints_[denseOfSlot_[id.index]] : nullptr;
+}
+
+std::uint32_t JointStore::removeAttachedTo(BodyId body) {
+    if (body.index >= jointsOfBody_.size()) return 0;
+    // Copied: remove() edits the list.
+    const std::vector<std::uint32_t> attached = jointsOfBody_[body.index];
+    for (std::uint32_t slot : attached) remove(ids_.idAt(slot));
+    return static_cast<std::uint32_t>(attached.size());
+}
+
+void JointStore::markBroken(std::uint32_t dense) {
+    Joint& j = joints_[dense];
+    if (j.broken) return;
+    j.broken = true;
+    brokenCount_ += 1;
+    brokenReports_.push_back(idOf(dense));
+}
+
+void JointStore::appendEdges(const BodyStorage& bodies,
+                             std::vector<std::pair<std::uint32_t, std::uint32_t>>& edges) const {
+    for (const Joint& j : joints_) {
+        if (j.broken) continue;
+        const BodySlot* a = bodies.find(j.bodyA);
+        const BodySlot* b = bodies.find(j.bodyB);
+        if (a && b && a->set == BodySet::Moving && b->set == BodySet::Moving) edges.emplace_back(a->dense, b->dense);
+    }
+}
+
+}  // namespace rubble::detail

@@ -1,0 +1,243 @@
+// The step. World::step is the table of contents of the engine (DESIGN.md, "One step"; docs/architecture.md,
+// "The step"): one line per stage, in the order data flows, each handed the world's state and the step's context.
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "simd/float_mode.h"
+#include "solver/solver_stage.h"
+#include "world/step_context.h"
+#include "world/world_impl.h"
+
+namespace rubble {
+
+namespace {
+
+using detail::StepContext;
+
+/// Decides once what this step runs, from the effects it simulates and the world's state.
+void planStep(World::Impl& w, StepContext& step, float dt) {
+    Profile& profile = step.profile;
+    profile.effects = step.effects;
+    step.sleeping = step.effects.has(Effect::Sleeping);
+    if (!step.sleeping && w.sleeping.sleepingBodies() > 0) w.sleeping.wakeAll(w.bodies);
+
+    step.dt = dt;
+    step.substeps = w.settings.substeps;
+    detail::IntegrationParams& params = step.integration;
+    params.dt = dt / static_cast<float>(step.substeps);
+    params.gravity = step.effects.has(Effect::Gravity) ? w.settings.gravity : Vec3{};
+    params.rotation = step.effects.has(Effect::Rotation);
+    params.integrator = w.settings.integrator;
+    params.skipAsleep = w.sleeping.sleepingBodies() > 0;
+    // Nothing changes velocities when there is no gravity, force, damping or rotation: the stage is not run.
+    step.velocitiesChange = step.effects.has(Effect::Gravity) || params.rotation || w.forcesPending || w.anyDamping ||
+                            params.integrator != Integrator::SemiImplicitEuler;
+
+    // Joints join the solve only when one acts (Effect::Joints is inferred from the joint store); else no joint code
+    // runs. Joints that break in this step stop acting at once but keep their rows until the step ends.
+    step.joints = step.effects.has(Effect::Joints);
+    step.brokenJointsBefore = w.joints.brokenReports().size();
+    if (step.joints) profile.joints = w.joints.activeCount();
+    step.continuous = step.effects.has(Effect::ContinuousCollision) && w.bodies.moving.size() > 0;
+}
+
+detail::SolverParts solverParts(World::Impl& w) {
+    return {w.contactSolver, w.jointSolver, w.joints, w.jointCoupling, w.bodies, w.islands};
+}
+
+/// Continuous collision sweeps each fast body from where it starts the step to where the substeps leave it.
+void startContinuousCollision(World::Impl& w, StepContext& step) {
+    if (!step.continuous) return;
+    const auto timer = step.time(Stage::Ccd);
+    w.ccd.begin(w.bodies.moving, step.pool);
+}
+
+void integrateVelocities(World::Impl& w, StepContext& step) {
+    step.integration.forces = w.forcesPending;
+    step.integration.clearForces = step.lastSubstep();
+    if (step.velocitiesChange) {
+        const auto timer = step.time(Stage::IntegrateVelocities);
+        detail::integrateVelocities(w.bodies.moving, step.integration, w.integrationScratch, step.pool, w.nonFinite);
+    }
+    w.freezeReported();
+}
+
+/// The islands stage before the solver: union-find over this step's manifolds, the joints and the links that hold
+/// each sleeping island together; with sleeping, islands that a sleeping body shares with an awake one (or with a
+/// moving kinematic body) wake whole.
+void buildIslands(World::Impl& w, StepContext& step) {
+    {
+        const auto timer = step.time(Stage::Islands);
+        w.islandEdges.clear();
+        w.joints.appendEdges(w.bodies, w.islandEdges);
+        w.sleeping.linkSleepingIslands(w.bodies, w.islandEdges);
+        w.islandBuilder.build(w.contacts, w.islandEdges, w.bodies.moving, step.pool, w.islands);
+        if (step.sleeping && w.sleeping.wakeTouched(w.islands, w.bodies, w.integrationScratch, w.contacts, w.impulses,
+                                                    w.contactCache, step.pool))
+            w.islandBuilder.assignManifolds(w.contacts, w.islands);
+    }
+    step.profile.islands = w.islands.count();
+    step.profile.largestIsland = w.islands.largest;
+}
+
+/// Bounds, pairs, manifolds, warm-start impulses, islands and the solver's rows: once per step, in the first
+/// substep, with boxes that cover the motion of the whole step. Pairs exist only where a moving body can meet
+/// another body.
+void findContacts(World::Impl& w, StepContext& step) {
+    Profile& profile = step.profile;
+    const std::uint32_t moving = w.bodies.moving.size();
+    if (!(moving > 1 || (moving == 1 && w.bodies.statics.size() > 0) || step.joints)) {
+        if (step.sleeping) {
+            // No pairs can exist, but a lone body still rests and falls asleep.
+            w.contacts.clear();
+            w.impulses.clear();
+            buildIslands(w, step);
+        }
+        return;
+    }
+    step.collided = true;
+    {
+        const auto timer = step.time(Stage::UpdateBounds);
+        detail::updateBounds(w.bodies.moving, w.shapeBounds, detail::BoundsParams{step.dt, w.settings.contactMargin},
+                             step.pool, w.movingBounds);
+    }
+    {
+        const auto timer = step.time(Stage::BroadPhase);
+        w.broadPhase.findPairs(w.movingBounds, w.bodies, w.shapes, w.settings.broadPhase, step.pool, w.pairs);
+    }
+    profile.broadPhase = w.broadPhase.lastKind();
+    profile.movingPairs = static_cast<std::uint32_t>(w.pairs.moving.size());
+    profile.staticPairs = static_cast<std::uint32_t>(w.pairs.statics.size());
+    profile.meshPairs = static_cast<std::uint32_t>(w.pairs.meshes.size());
+    profile.meshTriangles = static_cast<std::uint32_t>(w.pairs.meshTriangles.size());
+    {
+        const auto timer = step.time(Stage::NarrowPhase);
+        w.narrowPhase.run(w.pairs, w.bodies, w.shapes,
+                          {w.settings.contactMargin, step.dt, w.settings.manifoldReuseDistance}, step.pool, w.contacts);
+    }
+    profile.reusedManifolds = w.narrowPhase.reusedManifolds();
+    profile.manifolds = static_cast<std::uint32_t>(w.contacts.manifolds.size());
+    profile.contactPoints = w.contacts.pointCount;
+    {
+        const auto timer = step.time(Stage::ContactCache);
+        const SolverSettings& solver = w.settings.solver;
+        w.sleeping.flushWarmStarts(w.contactCache);
+        w.contactCache.warmStart(w.contacts, w.bodies, step.pool, w.impulses);
+        if (solver.warmStarting && solver.seedRestingLoads && step.effects.has(Effect::Gravity))
+            profile.seededManifolds = w.restingLoads.seed(w.contacts, w.contactCache.carried(), w.bodies.moving,
+                                                          {w.settings.gravity, step.integration.dt, solver.linearSlop},
+                                                          step.pool, w.impulses);
+    }
+    profile.matchedManifolds = w.contactCache.matchedManifolds();
+    profile.warmStartedPoints = w.contactCache.matchedPoints();
+    buildIslands(w, step);
+    detail::SolverParts solver = solverParts(w);
+    detail::prepareSolver(solver, w.contacts, w.impulses, step);
+    const detail::ContactSolverStats& stats = w.contactSolver.stats();
+    profile.constraints = stats.constraints;
+    profile.colors = stats.colors;
+    profile.solverBlocks = stats.blocks;
+    profile.largeIslandConstraints = stats.largeIslandConstraints;
+    profile.laneOccupancy = stats.laneOccupancy;
+    step.solve = !w.contactSolver.empty() || step.joints;
+}
+
+void solveVelocities(World::Impl& w, StepContext& step) {
+    if (!step.solve) return;
+    detail::SolverParts solver = solverParts(w);
+    detail::solveVelocities(solver, step);
+}
+
+void integratePositions(World::Impl& w, StepContext& step) {
+    {
+        const auto timer = step.time(Stage::IntegratePositions);
+        detail::integratePositions(w.bodies.moving, step.integration, w.integrationScratch, step.pool, w.nonFinite);
+    }
+    w.freezeReported();
+}
+
+void relaxAndBounce(World::Impl& w, StepContext& step) {
+    if (!step.solve) return;
+    detail::SolverParts solver = solverParts(w);
+    detail::relaxAndBounce(solver, step);
+}
+
+void finishContinuousCollision(World::Impl& w, StepContext& step) {
+    if (!step.continuous) return;
+    const auto timer = step.time(Stage::Ccd);
+    static const std::vector<detail::BodyPair> kNoPairs;
+    w.ccd.run(w.bodies, w.shapes, w.shapeBounds, w.broadPhase.staticBvh(w.bodies, w.shapes, step.pool),
+              step.collided ? w.pairs.moving : kNoPairs, w.settings.solver.linearSlop, step.pool);
+    step.profile.ccdBodies = w.ccd.stats().fastBodies;
+    step.profile.ccdHits = w.ccd.stats().hits;
+}
+
+/// The solved impulses go back to the contact cache, to warm-start the next step.
+void rememberContacts(World::Impl& w, StepContext& step) {
+    if (!step.collided) return;
+    const auto timer = step.time(Stage::ContactCache);
+    w.contactSolver.storeImpulses(w.impulses, step.pool);
+    w.contactCache.remember(w.contacts, w.impulses, step.pool);
+}
+
+void fallAsleep(World::Impl& w, StepContext& step) {
+    if (step.sleeping) {
+        const auto timer = step.time(Stage::Islands);
+        w.sleeping.fallAsleep(w.islands, w.contacts, w.impulses, w.contactCache, w.bodies, w.shapeBounds,
+                              w.settings.sleep, step.dt, step.pool);
+    }
+    step.profile.sleepingBodies = w.sleeping.sleepingBodies();
+}
+
+void finishStep(World::Impl& w, StepContext& step, detail::Clock::time_point begin) {
+    Profile& profile = step.profile;
+    w.forcesPending = false;
+    if (step.joints) {
+        profile.jointMs +=
+            std::chrono::duration<double, std::milli>(detail::Clock::duration(step.jointNs.load())).count();
+        profile.brokenJoints = static_cast<std::uint32_t>(w.joints.brokenReports().size() - step.brokenJointsBefore);
+        if (profile.brokenJoints > 0) w.effectsDirty = true;
+    }
+#if RUBBLE_VALIDATE
+    if (const std::string problem = w.bodies.checkInvariants(); !problem.empty())
+        fail("World::step (RUBBLE_VALIDATE)", "body storage is inconsistent: " + problem);
+#endif
+    profile.bodyCount = w.bodies.count();
+    profile.movingCount = w.bodies.moving.size();
+    profile.stepMs = std::chrono::duration<double, std::milli>(detail::Clock::now() - begin).count();
+    w.steps += 1;
+}
+
+}  // namespace
+
+void World::step(float dt) {
+    if (!std::isfinite(dt) || dt <= 0)
+        fail("World::step", "dt must be finite and > 0 (got " + std::to_string(dt) + ")");
+    Impl& w = *impl_;
+    // The pool's workers set the same mode for each chunk they run (parallel.cpp).
+    const simd::FlushSubnormals flushSubnormals;
+    const auto begin = detail::Clock::now();
+    w.profile = Profile{};
+    w.profile.stepIndex = w.steps;
+    w.profile.beginUs = detail::microsecondsSince(w.origin, begin);
+    w.resolveEffectsIfDirty();
+    StepContext step(w.settings, w.effects, *w.pool, w.profile, w.origin);
+    planStep(w, step, dt);
+
+    startContinuousCollision(w, step);
+    for (step.substep = 0; step.substep < step.substeps; ++step.substep) {
+        integrateVelocities(w, step);
+        if (step.substep == 0) findContacts(w, step);
+        solveVelocities(w, step);
+        integratePositions(w, step);
+        relaxAndBounce(w, step);
+    }
+    finishContinuousCollision(w, step);
+    rememberContacts(w, step);
+    fallAsleep(w, step);
+    finishStep(w, step, begin);
+}
+
+}  // namespace rubble
