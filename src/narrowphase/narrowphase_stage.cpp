@@ -47,17 +47,16 @@ constexpr std::size_t kSideB = kSideLanes;
 constexpr std::size_t kMarginLane = 2 * kSideLanes;
 constexpr std::size_t kInputLanes = kMarginLane + 1;
 
-/// Kernels that run in SIMD lanes, and how each side of their pairs is laid out in the input lanes.
-enum class Batched : std::uint8_t { SphereSphere, SphereBox, SphereCapsule, CapsuleCapsule, BoxBox, Count };
-/// Sphere: centre in the position lanes, radius in size x. Box: origin, orientation, half extents. Capsule: centre,
-/// half axis (in the orientation lanes x, y, z), radius in size x.
+/// How each side of a batched kernel's pairs is laid out in the input lanes. Sphere: centre in the position lanes,
+/// radius in size x. Box: origin, orientation, half extents. Capsule: centre, half axis (in the orientation lanes
+/// x, y, z), radius in size x.
 enum class SideForm : std::uint8_t { Sphere, Box, Capsule };
 
 }  // namespace
 
 struct NarrowPhaseStage::Scratch {
     /// Jobs of the chunk for each batched kernel.
-    std::vector<std::uint32_t> batched[static_cast<int>(Batched::Count)];
+    std::vector<std::uint32_t> batched[static_cast<int>(BatchedKernel::Count)];
     alignas(64) float in[kInputLanes][kBlock];
     /// Results of the closed-form kernels: normal xyz, point xyz, depth, second point xyz, depth.
     alignas(64) float out[11][kBlock];
@@ -513,17 +512,18 @@ void gatherBatch(const NarrowPhaseStage::Chunk& chunk, const std::uint32_t* jobs
 /// The jobs of one batched kernel in a chunk, a block at a time: each side's pose, size and motion gathered into
 /// lanes, margins in SIMD, then the kernel. Box-box writes each job's manifold in place; the closed-form kernels
 /// leave SoA results that are copied into the jobs' manifolds.
-void collideBatched(Batched kernel, const std::vector<std::uint32_t>& list, NarrowPhaseStage::Chunk& chunk,
+void collideBatched(BatchedKernel kernel, const std::vector<std::uint32_t>& list, NarrowPhaseStage::Chunk& chunk,
                     NarrowPhaseStage::Scratch& s, const BodyStorage& storage, const MovingRows& rows,
                     const std::vector<Shape>& shapes, const ShapeTables& tables, const NarrowPhaseParams& params) {
     const auto& in = s.in;
     const std::size_t b = kSideB;
     const float* margin = in[kMarginLane];
-    static constexpr SideForm kForms[static_cast<int>(Batched::Count)][2] = {{SideForm::Sphere, SideForm::Sphere},
-                                                                             {SideForm::Sphere, SideForm::Box},
-                                                                             {SideForm::Sphere, SideForm::Capsule},
-                                                                             {SideForm::Capsule, SideForm::Capsule},
-                                                                             {SideForm::Box, SideForm::Box}};
+    static constexpr SideForm kForms[static_cast<int>(BatchedKernel::Count)][2] = {
+        {SideForm::Sphere, SideForm::Sphere},
+        {SideForm::Sphere, SideForm::Box},
+        {SideForm::Sphere, SideForm::Capsule},
+        {SideForm::Capsule, SideForm::Capsule},
+        {SideForm::Box, SideForm::Box}};
     const SideForm formA = kForms[static_cast<int>(kernel)][0], formB = kForms[static_cast<int>(kernel)][1];
     const PairContacts result{s.out[0],     s.out[1], s.out[2], s.out[3], s.out[4], s.out[5],  s.out[6],
                               s.feature[0], s.count,  s.out[7], s.out[8], s.out[9], s.out[10], s.feature[1]};
@@ -533,36 +533,36 @@ void collideBatched(Batched kernel, const std::vector<std::uint32_t>& list, Narr
         for (std::size_t k0 = 0; k0 < n; k0 += simd::kLanes)
             gatherBatch(chunk, jobs, n, k0, formA, formB, storage, rows, shapes, tables, params, s);
         switch (kernel) {
-            case Batched::BoxBox:
+            case BatchedKernel::BoxBox:
                 collideBoxesBatch(
                     {in[kPx],     in[kPy],     in[kPz],     in[kQx],     in[kQy],     in[kQz],     in[kQw],
                      in[kSx],     in[kSy],     in[kSz],     in[b + kPx], in[b + kPy], in[b + kPz], in[b + kQx],
                      in[b + kQy], in[b + kQz], in[b + kQw], in[b + kSx], in[b + kSy], in[b + kSz], margin},
                     n, chunk.manifolds.data(), jobs, /*padded=*/true);
                 continue;
-            case Batched::SphereSphere:
+            case BatchedKernel::SphereSphere:
                 collideSpheresBatch(
                     {in[kPx], in[kPy], in[kPz], in[kSx], in[b + kPx], in[b + kPy], in[b + kPz], in[b + kSx], margin}, n,
                     params.margin, result);
                 break;
-            case Batched::SphereBox:
+            case BatchedKernel::SphereBox:
                 collideSphereBoxesBatch(
                     {in[kPx], in[kPy], in[kPz], in[kSx], in[b + kPx], in[b + kPy], in[b + kPz], in[b + kQx],
                      in[b + kQy], in[b + kQz], in[b + kQw], in[b + kSx], in[b + kSy], in[b + kSz], margin},
                     n, params.margin, result);
                 break;
-            case Batched::SphereCapsule:
+            case BatchedKernel::SphereCapsule:
                 collideSphereCapsulesBatch({in[kPx], in[kPy], in[kPz], in[kSx], in[b + kPx], in[b + kPy], in[b + kPz],
                                             in[b + kQx], in[b + kQy], in[b + kQz], in[b + kSx], margin},
                                            n, params.margin, result);
                 break;
-            case Batched::CapsuleCapsule:
+            case BatchedKernel::CapsuleCapsule:
                 collideCapsulesBatch(
                     {in[kPx], in[kPy], in[kPz], in[kQx], in[kQy], in[kQz], in[kSx], in[b + kPx], in[b + kPy],
                      in[b + kPz], in[b + kQx], in[b + kQy], in[b + kQz], in[b + kSx], margin},
                     n, params.margin, result);
                 break;
-            case Batched::Count:
+            case BatchedKernel::Count:
                 break;
         }
         for (std::size_t k = 0; k < n; ++k) {
@@ -578,40 +578,8 @@ void collideBatched(Batched kernel, const std::vector<std::uint32_t>& list, Narr
 
 }  // namespace
 
-NarrowPhaseStage::NarrowPhaseStage() {
-    // Kinds that meet in a job: the lower one is a sphere, box, capsule or hull (compounds are split into their
-    // children, meshes and heightfields are static and only ever the upper one).
-    for (int lower = 0; lower < kShapeKindCount; ++lower)
-        for (int upper = 0; upper < kShapeKindCount; ++upper) {
-            const auto lo = static_cast<ShapeKind>(lower), hi = static_cast<ShapeKind>(upper);
-            const bool meets = lo <= hi && lo <= ShapeKind::ConvexHull && hi != ShapeKind::Compound;
-            kernels_[lower][upper] = meets ? pairKernel(lo, hi) : PairKernel::Count;
-        }
-}
+NarrowPhaseStage::NarrowPhaseStage() = default;
 NarrowPhaseStage::~NarrowPhaseStage() = default;
-
-PairKernel pairKernel(ShapeKind lower, ShapeKind upper) {
-    using K = ShapeKind;
-    assert(lower <= K::ConvexHull && lower <= upper && upper != K::Compound);
-    if (lower == K::Sphere) {
-        if (upper == K::Sphere) return PairKernel::SphereSphere;
-        if (upper == K::Box) return PairKernel::SphereBox;
-        if (upper == K::Capsule) return PairKernel::SphereCapsule;
-    }
-    if (lower == K::Sphere && upper == K::ConvexHull) return PairKernel::SphereHull;
-    if (lower == K::Box && upper == K::Box) return PairKernel::BoxBox;
-    if (lower == K::Box && upper == K::Capsule) return PairKernel::BoxCapsule;
-    if (lower == K::Box && upper == K::ConvexHull) return PairKernel::BoxHull;
-    if (lower == K::Capsule && upper == K::Capsule) return PairKernel::CapsuleCapsule;
-    if (lower == K::Capsule && upper == K::ConvexHull) return PairKernel::CapsuleHull;
-    if (upper == K::TriangleMesh || upper == K::Heightfield) {
-        if (lower == K::Sphere) return PairKernel::SphereTriangle;
-        if (lower == K::Capsule) return PairKernel::CapsuleTriangle;
-        if (lower == K::Box) return PairKernel::BoxTriangle;
-        return PairKernel::HullTriangle;
-    }
-    return PairKernel::HullHull;  // both hulls: the one pair the tests above leave
-}
 
 void NarrowPhaseStage::prepareShapes(const std::vector<Shape>& shapes) {
     const std::size_t n = shapes.size();
@@ -799,10 +767,10 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
                 Job job;
                 if (kind2 < kind1) {
                     job.pair = {second, first, secondStatic, firstStatic, triangle, kNoChild, kNoChild};
-                    job.kernel = kernels_[static_cast<int>(kind2)][static_cast<int>(kind1)];
+                    job.kernel = pairKernel(kind2, kind1);
                 } else {
                     job.pair = {first, second, firstStatic, secondStatic, triangle, kNoChild, kNoChild};
-                    job.kernel = kernels_[static_cast<int>(kind1)][static_cast<int>(kind2)];
+                    job.kernel = pairKernel(kind1, kind2);
                 }
                 job.firstTriangle = runStart, job.triangles = runLength;
                 chunk.jobs.push_back(job);
@@ -941,27 +909,8 @@ void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorag
             }
             continue;
         }
-        Batched batched = Batched::Count;
-        switch (job.kernel) {
-            case PairKernel::SphereSphere:
-                batched = Batched::SphereSphere;
-                break;
-            case PairKernel::SphereBox:
-                batched = Batched::SphereBox;
-                break;
-            case PairKernel::SphereCapsule:
-                batched = Batched::SphereCapsule;
-                break;
-            case PairKernel::CapsuleCapsule:
-                batched = Batched::CapsuleCapsule;
-                break;
-            case PairKernel::BoxBox:
-                batched = Batched::BoxBox;
-                break;
-            default:
-                break;
-        }
-        if (batched != Batched::Count) {
+        const BatchedKernel batched = batchedKernel(job.kernel);
+        if (batched != BatchedKernel::Count) {
             scratch.batched[static_cast<int>(batched)].push_back(j);
             continue;
         }
@@ -983,9 +932,9 @@ void NarrowPhaseStage::runChunk(Chunk& chunk, Scratch& scratch, const BodyStorag
                          scratch);
         job.outputCount = static_cast<std::uint32_t>(chunk.meshPairs.size()) - job.firstOutput;
     }
-    for (int kernel = 0; kernel < static_cast<int>(Batched::Count); ++kernel)
+    for (int kernel = 0; kernel < static_cast<int>(BatchedKernel::Count); ++kernel)
         if (!scratch.batched[kernel].empty())
-            collideBatched(static_cast<Batched>(kernel), scratch.batched[kernel], chunk, scratch, storage, rows_,
+            collideBatched(static_cast<BatchedKernel>(kernel), scratch.batched[kernel], chunk, scratch, storage, rows_,
                            shapes, tables_, params);
 
     // Counted in locals: the compiler cannot keep the chunk's fields in registers across the loop.

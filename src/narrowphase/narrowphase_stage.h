@@ -15,6 +15,7 @@
 #include "contacts/contacts.h"
 #include "narrowphase/manifold.h"
 #include "narrowphase/manifold_reuse.h"
+#include "narrowphase/pair_kernels.h"
 #include "shapes/shape.h"
 #include "storage/body_storage.h"
 
@@ -22,32 +23,6 @@ namespace rubble::detail {
 
 class TaskPool;
 struct HullAdjacency;
-
-inline constexpr int kShapeKindCount = static_cast<int>(ShapeKind::Heightfield) + 1;
-
-/// Shape-pair kinds that have a kernel. The lower ShapeKind comes first.
-enum class PairKernel : std::uint8_t {
-    SphereSphere,
-    SphereBox,
-    SphereCapsule,
-    BoxBox,
-    CapsuleCapsule,
-    SphereHull,
-    BoxCapsule,
-    BoxHull,
-    CapsuleHull,
-    HullHull,
-    SphereTriangle,
-    CapsuleTriangle,
-    BoxTriangle,
-    HullTriangle,
-    Count
-};
-
-/// The kernel for two shape kinds given in ascending order. Every pair that can reach the narrow phase has one:
-/// compounds are split into their children (spheres, boxes, capsules or hulls) and meshes and heightfields are
-/// static-only, so they meet only those four kinds.
-PairKernel pairKernel(ShapeKind lower, ShapeKind upper);
 
 /// Per shape slot, what job building and the batched kernels read (SoA, for SIMD gathers); refreshed every run.
 struct ShapeTables {
@@ -157,8 +132,6 @@ private:
     std::vector<std::unique_ptr<Scratch>> scratch_;
     ShapeTables tables_;
     MovingRows rows_;
-    /// pairKernel for every pair of kinds that can meet, indexed [lower][upper].
-    PairKernel kernels_[kShapeKindCount][kShapeKindCount];
     /// Per shape slot: the hull whose adjacency is known to be in hullAdjacency_ (a cheap check per step).
     std::vector<const ConvexHull*> knownHull_;
     /// Edge-face adjacency of every hull met so far (Gauss-map pruning needs it), built before the parallel work.
