@@ -17,10 +17,11 @@ namespace {
 struct NamedFeature {
     std::uint32_t bit;
     const char* name;
+    unsigned glibcIndex;  ///< for x86_cpu_active: the C library's view, GLIBC_TUNABLES included
 };
 
 #define RUBBLE_CPU_FEATURE(bit, name) \
-    { bit, #name }
+    { bit, #name, x86_cpu_##name }
 constexpr NamedFeature kFeatures[] = {
     RUBBLE_CPU_FEATURE(kCpuSse41, SSE4_1),      RUBBLE_CPU_FEATURE(kCpuSse42, SSE4_2),
     RUBBLE_CPU_FEATURE(kCpuPopcnt, POPCNT),     RUBBLE_CPU_FEATURE(kCpuAvx, AVX),
@@ -54,23 +55,7 @@ std::string refusal(const std::string& missing) {
 
 std::uint32_t cpuFeatures() {
     std::uint32_t present = 0;
-    const auto add = [&](bool active, std::uint32_t bit) { present |= active ? bit : 0u; };
-    add(CPU_FEATURE_ACTIVE(SSE4_1), kCpuSse41);
-    add(CPU_FEATURE_ACTIVE(SSE4_2), kCpuSse42);
-    add(CPU_FEATURE_ACTIVE(POPCNT), kCpuPopcnt);
-    add(CPU_FEATURE_ACTIVE(AVX), kCpuAvx);
-    add(CPU_FEATURE_ACTIVE(AVX2), kCpuAvx2);
-    add(CPU_FEATURE_ACTIVE(FMA), kCpuFma);
-    add(CPU_FEATURE_ACTIVE(BMI1), kCpuBmi1);
-    add(CPU_FEATURE_ACTIVE(BMI2), kCpuBmi2);
-    add(CPU_FEATURE_ACTIVE(F16C), kCpuF16c);
-    add(CPU_FEATURE_ACTIVE(LZCNT), kCpuLzcnt);
-    add(CPU_FEATURE_ACTIVE(MOVBE), kCpuMovbe);
-    add(CPU_FEATURE_ACTIVE(AVX512F), kCpuAvx512f);
-    add(CPU_FEATURE_ACTIVE(AVX512BW), kCpuAvx512bw);
-    add(CPU_FEATURE_ACTIVE(AVX512CD), kCpuAvx512cd);
-    add(CPU_FEATURE_ACTIVE(AVX512DQ), kCpuAvx512dq);
-    add(CPU_FEATURE_ACTIVE(AVX512VL), kCpuAvx512vl);
+    for (const NamedFeature& f : kFeatures) present |= x86_cpu_active(f.glibcIndex) ? f.bit : 0u;
     return present;
 }
 
