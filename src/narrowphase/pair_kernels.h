@@ -1,13 +1,20 @@
 #pragma once
-// The narrow phase's dispatch: which kernel a pair of shape kinds goes to, and how that kernel runs (in SIMD lanes
-// over a batch of pairs, one pair at a time, or over a run of mesh triangles). One table, read wherever a job is
-// built or run (narrowphase_stage.cpp).
+// The narrow phase's dispatch: which kernel a pair of shape kinds goes to, and how that kernel runs: one pair at a
+// time, over a body's run of mesh triangles, or in SIMD lanes over a batch of pairs. Two tables, read wherever a job
+// is built or run: kinds to kernel here, kernel to its functions in pair_kernels.cpp.
 #include <cassert>
 #include <cstdint>
 
 #include "shapes/shape.h"
 
 namespace rubble::detail {
+
+struct Posed;
+struct Manifold;
+struct TriangleRun;
+struct TriangleScratch;
+struct NarrowChunk;
+class HullAdjacencies;
 
 inline constexpr int kShapeKindCount = static_cast<int>(ShapeKind::Heightfield) + 1;
 
@@ -30,7 +37,7 @@ enum class PairKernel : std::uint8_t {
     Count
 };
 
-/// Kernels that run in SIMD lanes over a batch of pairs (narrowphase_stage.cpp, collideBatched).
+/// Kernels that run in SIMD lanes over a batch of pairs (batched_pairs.h).
 enum class BatchedKernel : std::uint8_t { SphereSphere, SphereBox, SphereCapsule, CapsuleCapsule, BoxBox, Count };
 
 namespace pair_table {
@@ -47,13 +54,6 @@ inline constexpr PairKernel kKernelOf[kShapeKindCount][kShapeKindCount] = {
     {K::Count, K::Count, K::Count, K::Count, K::Count, K::Count, K::Count},
     {K::Count, K::Count, K::Count, K::Count, K::Count, K::Count, K::Count},
 };
-
-using B = BatchedKernel;
-/// Per kernel: the SIMD batch it runs in, or Count for one pair (or one triangle run) at a time.
-inline constexpr BatchedKernel kBatchedOf[static_cast<int>(PairKernel::Count)] = {
-    B::SphereSphere, B::SphereBox, B::SphereCapsule, B::BoxBox, B::CapsuleCapsule, B::Count, B::Count,
-    B::Count,        B::Count,     B::Count,         B::Count,  B::Count,          B::Count, B::Count,
-};
 }  // namespace pair_table
 
 /// The kernel for two shape kinds given in ascending order. Every pair that can reach the narrow phase has one.
@@ -63,7 +63,33 @@ inline PairKernel pairKernel(ShapeKind lower, ShapeKind upper) {
     return k;
 }
 
-/// The SIMD batch a kernel runs in, or BatchedKernel::Count.
-inline BatchedKernel batchedKernel(PairKernel kernel) { return pair_table::kBatchedOf[static_cast<int>(kernel)]; }
+/// Shape A against shape B (A's kind the lower), within `margin`: fills `out` (pointCount 0 when apart).
+using PairFunction = void (*)(const Posed& a, const Posed& b, float margin, const HullAdjacencies& hulls,
+                              Manifold& out);
+/// Body A against a run of mesh triangles (triangle_runs.h).
+using TriangleRunFunction = void (*)(const TriangleRun& run, const HullAdjacencies& hulls, TriangleScratch& scratch,
+                                     NarrowChunk& chunk);
+
+/// How a kernel runs. A pair of convex shapes has a one-pair function; a triangle kernel has only its run function.
+struct PairKernelRow {
+    PairKernel kernel;
+    PairFunction pair;                ///< one pair at a time, or null
+    TriangleRunFunction triangleRun;  ///< a body against a run of triangles, or null
+    /// The SIMD batch the stage runs the kernel's pairs in (instead of `pair`), or Count.
+    BatchedKernel batched;
+};
+
+/// One row per PairKernel, in its order (pair_kernels.cpp).
+extern const PairKernelRow kPairKernelRows[static_cast<int>(PairKernel::Count)];
+
+inline const PairKernelRow& kernelRow(PairKernel kernel) { return kPairKernelRows[static_cast<int>(kernel)]; }
+
+/// Whether the manifolds of two bodies (kinds in any order) are worth keeping for reuse: not those of the kernels
+/// that run in SIMD lanes, which cost less than a lookup and a copy. A compound's children may be anything: worth it.
+inline bool worthReusing(ShapeKind first, ShapeKind second) {
+    if (first == ShapeKind::Compound || second == ShapeKind::Compound) return true;
+    const PairKernel kernel = second < first ? pairKernel(second, first) : pairKernel(first, second);
+    return kernelRow(kernel).batched == BatchedKernel::Count;
+}
 
 }  // namespace rubble::detail
