@@ -16,13 +16,14 @@
 #include "runtime/snapshot.h"
 #include "runtime/snapshot_buffer.h"
 #include "runtime/step_clock.h"
-#include "world/world_impl.h"
+#include "world/validation.h"
 
 namespace rubble {
 
 namespace {
 
 using SteadyClock = std::chrono::steady_clock;
+using detail::fail;
 
 void validateSettings(const char* where, const RuntimeSettings& s) {
     if (!std::isfinite(s.rate) || s.rate <= 0 || s.rate > 1e6)
