@@ -4,6 +4,9 @@
 // the sizes: deep, grazing and separated pairs, as a broad phase hands them on) and resting (a hull or capsule on a
 // ground box, slightly sunk and wobbled). Hull adjacency is built once per hull (the engine keeps it with the
 // shape); BM_HullHullRandomNoAdjacency measures the convenience overload that rebuilds it per call.
+// Rocks: the hull of scenes/hull_pile.json (32 points on a sphere of radius 2, 60 faces, 90 edges) against itself,
+// both turned at random, in two pose sets: as the broad phase hands pairs on (centres anywhere in the cube where
+// the two world boxes overlap: mostly apart) and touching (centres 3.2 to 4 m apart: grazing to a few cm deep).
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -54,6 +57,41 @@ const HullSet& hullSet() {
         return s;
     }();
     return set;
+}
+
+/// The pile's rock (scenes/hull_pile.json: mt19937 seed 42, the same draw as the peers' harness).
+const ConvexHull& rock() {
+    static const ConvexHull hull = [] {
+        std::mt19937 rng(42);
+        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+        std::vector<Vec3> points;
+        while (points.size() < 32) {
+            const Vec3 p{u(rng), u(rng), u(rng)};
+            const float l = length(p);
+            if (l > 0.1f && l <= 1.0f) points.push_back(p * (2.0f / l));
+        }
+        return *buildShape(ConvexHullDef{points}).hull;
+    }();
+    return hull;
+}
+
+struct RockPair {
+    Transform a, b;
+};
+
+/// `touching`: centres 3.2 to 4 m apart in a random direction; else anywhere in the cube of side 8 m where the
+/// rocks' world boxes (half extent 2) overlap.
+std::vector<RockPair> rockPairs(bool touching) {
+    std::mt19937 rng(touching ? 45 : 44);
+    std::uniform_real_distribution<float> u(-1, 1), distance(3.2f, 4.0f);
+    std::vector<RockPair> pairs(4096);
+    for (RockPair& p : pairs) {
+        p.a = {{0, 0, 0}, randomRotation(rng)};
+        Vec3 offset{4 * u(rng), 4 * u(rng), 4 * u(rng)};
+        if (touching) offset = offset * (distance(rng) / std::fmax(length(offset), 1e-3f));
+        p.b = {offset, randomRotation(rng)};
+    }
+    return pairs;
 }
 
 struct Pair {
@@ -162,6 +200,43 @@ void BM_CapsuleHullRandom(benchmark::State& state) {
     });
 }
 
+/// `hinted`: each pair keeps its SatHint from call to call while body B moves back and forth by 5 mm and 5 mrad,
+/// as a pair does from step to step.
+void rockRock(benchmark::State& state, bool touching, bool hinted) {
+    static const HullAdjacency adjacency = buildHullAdjacency(rock());
+    const std::vector<RockPair> pairs = rockPairs(touching);
+    std::vector<Transform> moved(pairs.size());
+    const Quat turn = Quat::fromAxisAngle({0.3f, 1.0f, -0.5f}, 0.005f);
+    for (std::size_t k = 0; k < pairs.size(); ++k)
+        moved[k] = {pairs[k].b.position + Vec3{0.003f, -0.004f, 0.0f}, turn * pairs[k].b.rotation};
+    std::vector<SatHint> hints(pairs.size());
+    Manifold m;
+    std::size_t points = 0, manifolds = 0, calls = 0;
+    for (auto _ : state) {
+        for (std::size_t k = 0; k < pairs.size(); ++k) {
+            const RockPair& p = pairs[k];
+            const Transform& b = calls % 2 ? moved[k] : p.b;
+            collideHulls(rock(), adjacency, p.a, rock(), adjacency, b, 0.02f, m, hinted ? &hints[k] : nullptr);
+            points += static_cast<std::size_t>(m.pointCount);
+            manifolds += m.pointCount > 0 ? 1 : 0;
+            benchmark::DoNotOptimize(m);
+        }
+        ++calls;
+    }
+    const auto pairCount = static_cast<double>(state.iterations() * pairs.size());
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(pairs.size()));
+    state.counters["touching"] = static_cast<double>(manifolds) / pairCount;
+    state.counters["points_per_pair"] = static_cast<double>(points) / pairCount;
+}
+void BM_RockRockCandidates(benchmark::State& state) { rockRock(state, false, false); }
+void BM_RockRockCandidatesHinted(benchmark::State& state) { rockRock(state, false, true); }
+void BM_RockRockTouching(benchmark::State& state) { rockRock(state, true, false); }
+void BM_RockRockTouchingHinted(benchmark::State& state) { rockRock(state, true, true); }
+
+BENCHMARK(BM_RockRockCandidates);
+BENCHMARK(BM_RockRockCandidatesHinted);
+BENCHMARK(BM_RockRockTouching);
+BENCHMARK(BM_RockRockTouchingHinted);
 BENCHMARK(BM_HullHullRandom);
 BENCHMARK(BM_HullHullRandomNoAdjacency);
 BENCHMARK(BM_HullOnBoxResting);

@@ -10,6 +10,7 @@
 #include "narrowphase/clip.h"
 #include "narrowphase/gjk.h"
 #include "shapes/shape.h"
+#include "simd/simd.h"
 
 namespace rubble::detail {
 namespace {
@@ -44,6 +45,7 @@ struct HullView {
     int faceCount;
     const HullEdge* edges;
     int edgeCount;
+    const std::vector<float>* arcs;  ///< HullAdjacency::arcs
     Vec3 interior;
     float size;
 };
@@ -58,6 +60,7 @@ HullView viewOf(const ConvexHull& h, const HullAdjacency& adj) {
             static_cast<int>(h.faceNormals.size()),
             adj.edges.data(),
             static_cast<int>(adj.edges.size()),
+            adj.arcs,
             adj.interior,
             adj.size};
 }
@@ -112,7 +115,7 @@ HullView boxView(Vec3 half, Vec3 (&vertices)[8], float (&offsets)[6]) {
 /// Thread-local scratch (grown, never shrunk), so the kernels do not allocate in steady state.
 struct Scratch {
     std::vector<Vec3> vertices, normals, edgeDir, edgeCross;
-    std::vector<float> offsets, faceSide;
+    std::vector<float> offsets;
     HullAdjacency adjA, adjB;
 };
 Scratch& scratch() {
@@ -147,9 +150,47 @@ void closestSegmentPoints(Vec3 p1, Vec3 d1, Vec3 p2, Vec3 d2, float& s, float& t
     }
 }
 
+/// What the SAT's edge-pair test needs of one edge of A: its faces' normals, their cross product (the edge's great
+/// circle on the Gauss map), its start, direction and squared length, and its start relative to A's interior.
+struct EdgeOfA {
+    Vec3 a, b, bxa, pa, da, paRel;
+    float da2;
+};
+
+EdgeOfA edgeOfA(const HullView& A, int i) {
+    const HullEdge& e = A.edges[i];
+    EdgeOfA r;
+    r.a = A.normals[e.face0], r.b = A.normals[e.face1];
+    r.bxa = cross(r.b, r.a);
+    r.pa = A.vertices[e.v0], r.da = A.vertices[e.v1] - r.pa;
+    r.da2 = dot(r.da, r.da);
+    r.paRel = r.pa - A.interior;
+    return r;
+}
+
+/// The SAT's test of A's edge `ea` against B's edge (start `pb`, direction `db`, `crossB` the great circle of its
+/// negated face normals, `cba` and `dba` the sides of those normals against ea's circle): whether the pair is a face
+/// of the Minkowski difference A - B whose axis could separate by more than `limit` (Gregorius' IsMinkowskiFace,
+/// near-parallel edges skipped); if so its unnormalised axis (pointing away from A's interior) and the numerator of
+/// the separation along it. The search and the hint test both go through here, so they agree bit for bit.
+[[gnu::always_inline]] inline bool edgePairCandidate(const EdgeOfA& ea, Vec3 pb, Vec3 db, Vec3 crossB, float cba,
+                                                     float dba, float limit, Vec3& axis, float& len2, float& num) {
+    constexpr float kParallel2 = kBoxEdgeParallelEpsilon * kBoxEdgeParallelEpsilon;
+    if (cba * dba >= 0) return false;
+    const float adc = dot(ea.a, crossB), bdc = dot(ea.b, crossB);
+    if (adc * bdc >= 0 || cba * bdc <= 0) return false;
+    axis = cross(ea.da, db);
+    len2 = dot(axis, axis);
+    if (len2 < kParallel2 * ea.da2 * dot(db, db)) return false;
+    if (dot(axis, ea.paRel) < 0) axis = -axis;
+    num = dot(axis, pb - ea.pa);
+    // sep = num / |axis| > limit, tested without the square root first.
+    return !(limit <= 0 ? num <= limit * std::sqrt(len2) : (num <= 0 || num * num <= limit * limit * len2));
+}
+
 /// Hull-hull kernel. B is brought into A's frame (relative to A's centre); all tests run there.
 bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView& B, const Transform& poseB,
-                      float margin, Manifold& out) {
+                      float margin, Manifold& out, SatHint* hint) {
     out.pointCount = 0;
     Scratch& sc = scratch();
     const Quat qInv = conjugate(poseA.rotation);
@@ -173,16 +214,48 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         ob[f] = B.offsets[f] + dot(nb[f], t);
     }
     const Vec3* va = A.vertices;
-
-    // Face axes of A: separation = lowest vertex of B above A's face plane.
-    float sepA = -INFINITY;
-    int faceA = 0;
-    for (int f = 0; f < A.faceCount; ++f) {
+    // Separation along a face axis of A (of B): the lowest vertex of B (of A) above the face's plane.
+    const auto faceASeparation = [&](int f) {
         const Vec3 n = A.normals[f];
         float lo = INFINITY;
         for (int i = 0; i < B.vertexCount; ++i) lo = minf(lo, dot(n, vb[i]));
-        const float sep = lo - A.offsets[f];
-        if (sep > margin) return false;  // separated: the common exit, taken as soon as found
+        return lo - A.offsets[f];
+    };
+    const auto faceBSeparation = [&](int f) {
+        const Vec3 n = nb[f];
+        float lo = INFINITY;
+        for (int i = 0; i < A.vertexCount; ++i) lo = minf(lo, dot(n, va[i]));
+        return lo - ob[f];
+    };
+    const auto separatedBy = [&](SatHint::Kind kind, int a, int b) {
+        if (hint) *hint = {kind, true, static_cast<std::uint16_t>(a), static_cast<std::uint16_t>(b)};
+        return false;
+    };
+
+    // Last call's separating axis first: one axis instead of the search, when the pair is still apart along it.
+    if (hint && hint->separated) {
+        const int a = hint->a, b = hint->b;
+        if (hint->kind == SatHint::kFaceA && a < A.faceCount && faceASeparation(a) > margin) return false;
+        if (hint->kind == SatHint::kFaceB && a < B.faceCount && faceBSeparation(a) > margin) return false;
+        if (hint->kind == SatHint::kEdges && a < A.edgeCount && b < B.edgeCount) {
+            const EdgeOfA ea = edgeOfA(A, a);
+            const HullEdge& eb = B.edges[b];
+            Vec3 axis;
+            float len2, num;
+            if (edgePairCandidate(ea, vb[eb.v0], vb[eb.v1] - vb[eb.v0], cross(nb[eb.face1], nb[eb.face0]),
+                                  -dot(nb[eb.face0], ea.bxa), -dot(nb[eb.face1], ea.bxa), margin, axis, len2, num) &&
+                num / std::sqrt(len2) > margin)
+                return false;
+        }
+    }
+    if (hint) *hint = {};
+
+    // Face axes of A.
+    float sepA = -INFINITY;
+    int faceA = 0;
+    for (int f = 0; f < A.faceCount; ++f) {
+        const float sep = faceASeparation(f);
+        if (sep > margin) return separatedBy(SatHint::kFaceA, f, 0);  // the common exit, taken as soon as found
         if (sep > sepA) sepA = sep, faceA = f;
     }
 
@@ -190,11 +263,8 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     float sepB = -INFINITY;
     int faceB = 0;
     for (int f = 0; f < B.faceCount; ++f) {
-        const Vec3 n = nb[f];
-        float lo = INFINITY;
-        for (int i = 0; i < A.vertexCount; ++i) lo = minf(lo, dot(n, va[i]));
-        const float sep = lo - ob[f];
-        if (sep > margin) return false;
+        const float sep = faceBSeparation(f);
+        if (sep > margin) return separatedBy(SatHint::kFaceB, f, 0);
         if (sep > sepB) sepB = sep, faceB = f;
     }
 
@@ -215,40 +285,48 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     }
     const Vec3* eDirB = sc.edgeDir.data();
     const Vec3* eCrossB = sc.edgeCross.data();
-    if (sc.faceSide.size() < static_cast<std::size_t>(B.faceCount)) sc.faceSide.resize(B.faceCount);
-    float* faceSide = sc.faceSide.data();
-    constexpr float kParallel2 = kBoxEdgeParallelEpsilon * kBoxEdgeParallelEpsilon;
+    // Each of B's edges against all of A's at once, A's in SIMD lanes: the three sign tests of the Minkowski-face test
+    // branch-free over A's arcs (most pairs fail them), and only the lanes that pass go on, one at a time, through
+    // edgePairCandidate, which repeats the tests with the same arithmetic and finds the axis. The best pair is the
+    // one a scan over A's edges, then B's, would keep first: the largest separation, ties to the lowest (i, j).
+    using simd::FloatW;
+    const float* arcs[9];
+    for (int k = 0; k < 9; ++k) arcs[k] = A.arcs[k].data();
     float sepE = -INFINITY;
     int edgeA = -1, edgeB = -1;
     Vec3 axisE{};
-    for (int i = 0; i < A.edgeCount; ++i) {
-        const HullEdge& ea = A.edges[i];
-        const Vec3 a = A.normals[ea.face0], b = A.normals[ea.face1];
-        const Vec3 bxa = cross(b, a);
-        const Vec3 pa = va[ea.v0], da = va[ea.v1] - pa;
-        const float da2 = dot(da, da);
-        const Vec3 paRel = pa - A.interior;
-        // Side of every B face normal against this edge's great circle, once per face rather than twice per edge.
-        for (int f = 0; f < B.faceCount; ++f) faceSide[f] = -dot(nb[f], bxa);
-        for (int j = 0; j < B.edgeCount; ++j) {
-            const HullEdge& eb = B.edges[j];
-            const float cba = faceSide[eb.face0], dba = faceSide[eb.face1];
-            if (cba * dba >= 0) continue;
-            const float adc = dot(a, eCrossB[j]), bdc = dot(b, eCrossB[j]);
-            if (adc * bdc >= 0 || cba * bdc <= 0) continue;
-            Vec3 axis = cross(da, eDirB[j]);
-            const float len2 = dot(axis, axis);
-            if (len2 < kParallel2 * da2 * dot(eDirB[j], eDirB[j])) continue;
-            if (dot(axis, paRel) < 0) axis = -axis;
-            const float num = dot(axis, vb[eb.v0] - pa);
-            // sep = num / |axis| > limit, tested without the square root first.
-            if (limit <= 0 ? num <= limit * std::sqrt(len2) : (num <= 0 || num * num <= limit * limit * len2)) continue;
-            const float sep = num / std::sqrt(len2);
-            if (sep > margin) return false;
-            if (sep > sepE) sepE = sep, edgeA = i, edgeB = j, axisE = axis / std::sqrt(len2);
+    alignas(64) bool skip[simd::kLanes];
+    for (int j = 0; j < B.edgeCount; ++j) {
+        const HullEdge& eb = B.edges[j];
+        const Vec3 n0 = nb[eb.face0], n1 = nb[eb.face1], c = eCrossB[j];
+        const FloatW n0x(n0.x), n0y(n0.y), n0z(n0.z), n1x(n1.x), n1y(n1.y), n1z(n1.z), cx(c.x), cy(c.y), cz(c.z);
+        const FloatW zero(0.0f);
+        for (int i0 = 0; i0 < A.edgeCount; i0 += static_cast<int>(simd::kLanes)) {
+            const auto row = [&](int k) { return simd::load<FloatW>(arcs[k] + i0); };
+            const FloatW bxaX = row(6), bxaY = row(7), bxaZ = row(8);
+            const FloatW cba = -(n0x * bxaX + n0y * bxaY + n0z * bxaZ);
+            const FloatW dba = -(n1x * bxaX + n1y * bxaY + n1z * bxaZ);
+            const FloatW adc = row(0) * cx + row(1) * cy + row(2) * cz;
+            const FloatW bdc = row(3) * cx + row(4) * cy + row(5) * cz;
+            const simd::MaskW fail = (cba * dba >= zero) | (adc * bdc >= zero) | (cba * bdc <= zero);
+            if (simd::all(fail)) continue;
+            simd::storeMask(skip, fail);
+            for (int k = 0; k < static_cast<int>(simd::kLanes) && i0 + k < A.edgeCount; ++k) {
+                if (skip[k]) continue;
+                const int i = i0 + k;
+                const EdgeOfA ea = edgeOfA(A, i);
+                Vec3 axis;
+                float len2, num;
+                if (!edgePairCandidate(ea, vb[eb.v0], eDirB[j], c, -dot(n0, ea.bxa), -dot(n1, ea.bxa), limit, axis,
+                                       len2, num))
+                    continue;
+                const float sep = num / std::sqrt(len2);
+                if (sep > margin) return separatedBy(SatHint::kEdges, i, j);
+                if (sep > sepE || (sep == sepE && i < edgeA))
+                    sepE = sep, edgeA = i, edgeB = j, axisE = axis / std::sqrt(len2);
+            }
         }
     }
-    if (sepE > margin) return false;
 
     const Rot ra = toRot(poseA.rotation);
     if (edgeA >= 0 && clearlyBetter(sepE, sepFace)) {
@@ -271,6 +349,8 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         out.points[0].feature = (2u << 30) | ((static_cast<std::uint32_t>(edgeA) & 0x7FFFu) << 15) |
                                 (static_cast<std::uint32_t>(edgeB) & 0x7FFFu);
         out.pointCount = 1;
+        if (hint)
+            *hint = {SatHint::kEdges, false, static_cast<std::uint16_t>(edgeA), static_cast<std::uint16_t>(edgeB)};
         return true;
     }
 
@@ -352,6 +432,7 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         out.points[k].feature = base | ids[c];
     }
     out.pointCount = count;
+    if (hint && count > 0) *hint = {useB ? SatHint::kFaceB : SatHint::kFaceA, false, static_cast<std::uint16_t>(fr), 0};
     return count > 0;
 }
 
@@ -688,12 +769,20 @@ HullAdjacency buildHullAdjacency(const ConvexHull& hull) {
     for (const Vec3& p : hull.vertices) sum += p;
     adj.interior = nv > 0 ? sum / static_cast<float>(nv) : Vec3{};
     for (const Vec3& p : hull.vertices) adj.size = maxf(adj.size, length(p - adj.interior));
+    const std::size_t padded = (adj.edges.size() + kHullArcPadding - 1) / kHullArcPadding * kHullArcPadding;
+    for (std::vector<float>& row : adj.arcs) row.assign(padded, 0.0f);
+    for (std::size_t e = 0; e < adj.edges.size(); ++e) {
+        const Vec3 a = hull.faceNormals[adj.edges[e].face0], b = hull.faceNormals[adj.edges[e].face1];
+        const Vec3 c = cross(b, a);
+        const float values[9] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z};
+        for (int r = 0; r < 9; ++r) adj.arcs[r][e] = values[r];
+    }
     return adj;
 }
 
 bool collideHulls(const ConvexHull& a, const HullAdjacency& adjA, const Transform& poseA, const ConvexHull& b,
-                  const HullAdjacency& adjB, const Transform& poseB, float margin, Manifold& out) {
-    return collidePolytopes(viewOf(a, adjA), poseA, viewOf(b, adjB), poseB, margin, out);
+                  const HullAdjacency& adjB, const Transform& poseB, float margin, Manifold& out, SatHint* hint) {
+    return collidePolytopes(viewOf(a, adjA), poseA, viewOf(b, adjB), poseB, margin, out, hint);
 }
 
 bool collideHulls(const ConvexHull& a, const Transform& poseA, const ConvexHull& b, const Transform& poseB,
@@ -705,10 +794,10 @@ bool collideHulls(const ConvexHull& a, const Transform& poseA, const ConvexHull&
 }
 
 bool collideBoxHull(const Transform& box, Vec3 half, const ConvexHull& hull, const HullAdjacency& adj,
-                    const Transform& poseHull, float margin, Manifold& out) {
+                    const Transform& poseHull, float margin, Manifold& out, SatHint* hint) {
     Vec3 vertices[8];
     float offsets[6];
-    return collidePolytopes(boxView(half, vertices, offsets), box, viewOf(hull, adj), poseHull, margin, out);
+    return collidePolytopes(boxView(half, vertices, offsets), box, viewOf(hull, adj), poseHull, margin, out, hint);
 }
 
 bool collideBoxHull(const Transform& box, Vec3 half, const ConvexHull& hull, const Transform& poseHull, float margin,

@@ -85,22 +85,41 @@ struct HullAdjacency {
     std::vector<HullEdge> edges;
     Vec3 interior;
     float size = 0;
+    /// Per edge, in SoA rows padded with zeros to a multiple of kHullArcPadding: the normals of its faces (face0
+    /// `a`, face1 `b`) and their cross product b x a, the edge's arc on the Gauss map. Rows: ax ay az bx by bz cx cy
+    /// cz. The SAT's edge-pair test reads them for the hull on side A, several edges at a time in SIMD lanes.
+    std::vector<float> arcs[9];
 };
+/// The widest SIMD batch of any build of the core (AVX-512, 16 floats): the arcs are padded for every level.
+inline constexpr std::size_t kHullArcPadding = 16;
 HullAdjacency buildHullAdjacency(const ConvexHull& hull);
+
+/// The SAT axis that decided a pair's last result: the axis that separated it by more than the margin, or the
+/// contact's reference face or edge pair. Given back on the pair's next call, a separating axis is tested before
+/// the whole search: if it still separates, the pair is done for the cost of one axis. Every axis it can name is
+/// one the whole search tests too, with the same arithmetic, so the answer is the same with or without the hint;
+/// only the time differs. A hint for other hulls (indices out of range) is ignored.
+struct SatHint {
+    enum Kind : std::uint8_t { kNone, kFaceA, kFaceB, kEdges };
+    Kind kind = kNone;
+    bool separated = false;      ///< the axis separated the pair (else it made the contact)
+    std::uint16_t a = 0, b = 0;  ///< face of A or of B (in `a`), or edge of A and edge of B
+};
 
 /// Contact manifold of hull A and hull B (posed by poseA / poseB). Returns false with out.pointCount = 0 when the
 /// hulls are farther apart than `margin` along some axis. Otherwise: normal A -> B, 1 to 4 points on B's surface
-/// with depth >= -margin, feature ids as above.
+/// with depth >= -margin, feature ids as above. `hint`, when given, is read and rewritten (SatHint).
 bool collideHulls(const ConvexHull& a, const Transform& poseA, const ConvexHull& b, const Transform& poseB,
                   float margin, Manifold& out);
 bool collideHulls(const ConvexHull& a, const HullAdjacency& adjA, const Transform& poseA, const ConvexHull& b,
-                  const HullAdjacency& adjB, const Transform& poseB, float margin, Manifold& out);
+                  const HullAdjacency& adjB, const Transform& poseB, float margin, Manifold& out,
+                  SatHint* hint = nullptr);
 
 /// Box A (half extents `half`) against hull B: the box as an 8-vertex hull built from a static unit cube.
 bool collideBoxHull(const Transform& box, Vec3 half, const ConvexHull& hull, const Transform& poseHull, float margin,
                     Manifold& out);
 bool collideBoxHull(const Transform& box, Vec3 half, const ConvexHull& hull, const HullAdjacency& adj,
-                    const Transform& poseHull, float margin, Manifold& out);
+                    const Transform& poseHull, float margin, Manifold& out, SatHint* hint = nullptr);
 
 /// Capsule A against box B. Normal from the capsule to the box; points on the box surface; 1 or 2 points.
 bool collideCapsuleBox(const CapsuleSegment& capsule, const Transform& box, Vec3 half, float margin, Manifold& out);

@@ -38,11 +38,16 @@ public:
     void add(ManifoldReuse::Section section, std::uint32_t first, std::uint32_t second, bool secondStatic,
              std::uint32_t run = ~0u, std::uint32_t runLength = 0) {
         const std::size_t pendingBefore = chunk_.pending.size();
+        lastHint_ = {};
         if (cache_ && reuseOrKeep(section, first, second, secondStatic)) return;
         addJobs(first, false, second, secondStatic, run, runLength);
-        // Closes the pending entry reuseOrKeep opened for the candidate whose jobs were just made.
-        if (chunk_.pending.size() > pendingBefore)
-            chunk_.pending.back().jobEnd = static_cast<std::uint32_t>(chunk_.jobs.size());
+        // Closes the pending entry reuseOrKeep opened for the candidate whose jobs were just made; a candidate of one
+        // job takes the SAT hint its entry kept.
+        if (chunk_.pending.size() > pendingBefore) {
+            PendingEntry& pending = chunk_.pending.back();
+            pending.jobEnd = static_cast<std::uint32_t>(chunk_.jobs.size());
+            if (pending.jobEnd - pending.jobBegin == 1) chunk_.jobs[pending.jobBegin].hint = lastHint_;
+        }
     }
 
 private:
@@ -87,6 +92,7 @@ private:
         if (found.entry != nullptr && found.entry->shapeFirst == shape1 && found.entry->shapeSecond == shape2 &&
             (sameBodies || (found.entry->slots == now.slots && found.entry->generations == now.generations))) {
             const ManifoldReuse::Entry& then = *found.entry;
+            lastHint_ = then.hint;
             const PoseChange change1 = poseChange(then.first, now.first);
             const PoseChange change2 = poseChange(then.second, now.second);
             const float moved = relativeDisplacement(change1, change2, tables_.reach[shape1]);
@@ -180,6 +186,7 @@ private:
     const ManifoldReuse& reuse_;
     ManifoldReuse::ChunkCache* cache_;
     ManifoldReuse::Finder finder_;
+    SatHint lastHint_;  ///< the hint of the entry reuseOrKeep found for the current candidate
 };
 
 }  // namespace

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "narrowphase/hull_pairs.h"
 #include "narrowphase/manifold.h"
 #include "rubble/math.h"
 
@@ -91,6 +92,8 @@ public:
         BodyPose first, second;
         float margin = 0;
         std::uint32_t firstStored = 0, storedCount = 0;  ///< in its chunk's `stored`
+        /// A pair of two whole polytopes (one job): the SAT's last deciding axis, given to its next computation.
+        SatHint hint;
     };
     struct ChunkCache {
         std::vector<Entry> entries;  ///< ascending `order`

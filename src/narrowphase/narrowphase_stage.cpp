@@ -134,7 +134,7 @@ void NarrowPhaseStage::runChunk(NarrowChunk& chunk, Scratch& scratch, const Body
         if (job.triangles == 0) {
             Manifold& out = chunk.manifolds[j];
             out.pointCount = 0;
-            kernel.pair(a, b, margin, hulls_, out);
+            kernel.pair(a, b, margin, hulls_, job.hint, out);
             continue;
         }
         mesh.prepare(a, b);
@@ -174,6 +174,7 @@ void NarrowPhaseStage::keepComputed(NarrowChunk& chunk, ManifoldReuse::ChunkCach
     for (const PendingEntry& p : chunk.pending) {
         ManifoldReuse::Entry& entry = cache.entries[p.entry];
         entry.firstStored = static_cast<std::uint32_t>(cache.stored.size());
+        entry.hint = p.jobEnd - p.jobBegin == 1 ? chunk.jobs[p.jobBegin].hint : SatHint{};
         for (std::uint32_t j = p.jobBegin; j < p.jobEnd; ++j) {
             const PairJob& job = chunk.jobs[j];
             if (job.triangles == 0) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "contacts/contacts.h"
+#include "narrowphase/hull_pairs.h"
 #include "narrowphase/manifold.h"
 #include "narrowphase/manifold_reuse.h"
 #include "narrowphase/pair_kernels.h"
@@ -25,6 +26,8 @@ struct PairJob {
     std::uint32_t reuse = kNoReuse;
     /// A run of triangles: where its touching triangles went in NarrowChunk::meshPairs.
     std::uint32_t firstOutput = 0, outputCount = 0;
+    /// The polytope kernels' SAT hint: from the pair's reuse entry, and back into it (hull_pairs.h).
+    SatHint hint;
 };
 
 /// Manifolds of the chunk's reuse cache to move with their bodies: the motions of the manifolds' A and B since.

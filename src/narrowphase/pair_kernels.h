@@ -14,6 +14,7 @@ struct Manifold;
 struct TriangleRun;
 struct TriangleScratch;
 struct NarrowChunk;
+struct SatHint;
 class HullAdjacencies;
 
 inline constexpr int kShapeKindCount = static_cast<int>(ShapeKind::Heightfield) + 1;
@@ -63,8 +64,9 @@ inline PairKernel pairKernel(ShapeKind lower, ShapeKind upper) {
     return k;
 }
 
-/// Shape A against shape B (A's kind the lower), within `margin`: fills `out` (pointCount 0 when apart).
-using PairFunction = void (*)(const Posed& a, const Posed& b, float margin, const HullAdjacencies& hulls,
+/// Shape A against shape B (A's kind the lower), within `margin`: fills `out` (pointCount 0 when apart). The
+/// polytope kernels read and rewrite `hint` (hull_pairs.h); the others leave it alone.
+using PairFunction = void (*)(const Posed& a, const Posed& b, float margin, const HullAdjacencies& hulls, SatHint& hint,
                               Manifold& out);
 /// Body A against a run of mesh triangles (triangle_runs.h).
 using TriangleRunFunction = void (*)(const TriangleRun& run, const HullAdjacencies& hulls, TriangleScratch& scratch,

@@ -25,6 +25,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <set>
 #include <vector>
@@ -328,6 +329,64 @@ TEST(HullPairs, FarFromOriginMatchesOrigin) {
             EXPECT_LT(length(m1.points[k].position - far - m0.points[k].position), 2e-3f);
         }
     }
+}
+
+/// Bitwise equality of two manifolds (the hint may only save time, never change a bit of the answer).
+void expectSameManifold(const Manifold& m0, const Manifold& m1, const char* what, int it) {
+    ASSERT_EQ(m0.pointCount, m1.pointCount) << what << " " << it;
+    if (m0.pointCount == 0) return;
+    EXPECT_EQ(std::memcmp(&m0.normal, &m1.normal, sizeof(Vec3)), 0) << what << " " << it;
+    for (int k = 0; k < m0.pointCount; ++k) {
+        EXPECT_EQ(std::memcmp(&m0.points[k].position, &m1.points[k].position, sizeof(Vec3)), 0) << what << " " << it;
+        EXPECT_EQ(std::memcmp(&m0.points[k].depth, &m1.points[k].depth, sizeof(float)), 0) << what << " " << it;
+        EXPECT_EQ(m0.points[k].feature, m1.points[k].feature) << what << " " << it;
+    }
+}
+
+// A pair moved as over consecutive steps (1 cm and 0.01 rad each), with the hint of its last call, then with a hint
+// from another pair (stale indices, foreign kinds): the manifold must equal the hint-less one bit for bit, and the
+// separated calls the hint answered alone must be the common case.
+TEST(HullPairs, SatHintNeverChangesTheAnswer) {
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<float> u(-1, 1), frac(0, 1);
+    int separated = 0, answeredByHint = 0;
+    SatHint foreign;
+    for (int it = 0; it < 200; ++it) {
+        const ConvexHull a = randomHull(rng, 32, 1.0f), b = randomHull(rng, 24, 0.8f);
+        const HullAdjacency adjA = buildHullAdjacency(a), adjB = buildHullAdjacency(b);
+        Transform pa{{0, 0, 0}, randomRotation(rng)};
+        Vec3 dir{u(rng), u(rng), u(rng)};
+        dir = dir / std::fmax(length(dir), 1e-3f);
+        Transform pb{dir * ((0.6f + 0.6f * frac(rng)) * (hullSize(a) + hullSize(b))), randomRotation(rng)};
+        const Vec3 step = Vec3{u(rng), u(rng), u(rng)} * 0.01f;
+        const Quat turn = Quat::fromAxisAngle(Vec3{u(rng), u(rng), u(rng)} + Vec3{0, 0, 1e-3f}, 0.01f);
+        SatHint hint;
+        for (int s = 0; s < 8; ++s) {
+            const float margin = s % 2 ? 0.02f : 0.1f;
+            Manifold plain, hinted, stale;
+            const bool hit = collideHulls(a, adjA, pa, b, adjB, pb, margin, plain);
+            const SatHint before = hint;
+            const bool hitHinted = collideHulls(a, adjA, pa, b, adjB, pb, margin, hinted, &hint);
+            SatHint other = foreign;
+            const bool hitStale = collideHulls(a, adjA, pa, b, adjB, pb, margin, stale, &other);
+            ASSERT_EQ(hit, hitHinted) << it << " step " << s;
+            ASSERT_EQ(hit, hitStale) << it << " step " << s;
+            expectSameManifold(plain, hinted, "hinted", it);
+            expectSameManifold(plain, stale, "stale", it);
+            if (!hit) {
+                ++separated;
+                EXPECT_TRUE(hint.separated) << it << " step " << s;
+                // The hint answered alone when it named the axis it was given.
+                if (before.separated && hint.kind == before.kind && hint.a == before.a && hint.b == before.b)
+                    ++answeredByHint;
+            }
+            foreign = hint;
+            pb = {pb.position + step - dir * 0.01f, turn * pb.rotation};
+            pa = {pa.position, conjugate(turn) * pa.rotation};
+        }
+    }
+    EXPECT_GT(separated, 200);
+    EXPECT_GT(answeredByHint, separated / 2);
 }
 
 TEST(HullPairs, SpeculativeMargin) {
