@@ -45,7 +45,8 @@ struct HullView {
     int faceCount;
     const HullEdge* edges;
     int edgeCount;
-    const std::vector<float>* arcs;  ///< HullAdjacency::arcs
+    const std::vector<float>* arcs;        ///< HullAdjacency::arcs
+    const std::vector<float>* normalRows;  ///< HullAdjacency::normalRows
     Vec3 interior;
     float size;
 };
@@ -61,6 +62,7 @@ HullView viewOf(const ConvexHull& h, const HullAdjacency& adj) {
             adj.edges.data(),
             static_cast<int>(adj.edges.size()),
             adj.arcs,
+            adj.normalRows,
             adj.interior,
             adj.size};
 }
@@ -115,7 +117,7 @@ HullView boxView(Vec3 half, Vec3 (&vertices)[8], float (&offsets)[6]) {
 /// Thread-local scratch (grown, never shrunk), so the kernels do not allocate in steady state.
 struct Scratch {
     std::vector<Vec3> vertices, normals, edgeDir, edgeCross;
-    std::vector<float> offsets;
+    std::vector<float> offsets, normalRows[3];
     HullAdjacency adjA, adjB;
 };
 Scratch& scratch() {
@@ -188,6 +190,20 @@ EdgeOfA edgeOfA(const HullView& A, int i) {
     return !(limit <= 0 ? num <= limit * std::sqrt(len2) : (num <= 0 || num * num <= limit * limit * len2));
 }
 
+/// For faces [f0, f0 + lanes) of one hull (normals in SoA rows, padded), the lowest of the other hull's vertices
+/// along each: min over i of dot(n, v_i), with dot's order of operations and minf's choice, lane by lane.
+void lowestAlongFaces(const float* const rows[3], int f0, const Vec3* vertices, int count, float* lowest) {
+    using simd::FloatW;
+    const FloatW nx = simd::load<FloatW>(rows[0] + f0), ny = simd::load<FloatW>(rows[1] + f0),
+                 nz = simd::load<FloatW>(rows[2] + f0);
+    FloatW lo(INFINITY);
+    for (int i = 0; i < count; ++i) {
+        const Vec3 v = vertices[i];
+        lo = simd::min(lo, nx * FloatW(v.x) + ny * FloatW(v.y) + nz * FloatW(v.z));
+    }
+    simd::store(lowest, lo);
+}
+
 /// Hull-hull kernel. B is brought into A's frame (relative to A's centre); all tests run there.
 bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView& B, const Transform& poseB,
                       float margin, Manifold& out, SatHint* hint) {
@@ -209,10 +225,17 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     Vec3* nb = sc.normals.data();
     float* ob = sc.offsets.data();
     for (int i = 0; i < B.vertexCount; ++i) vb[i] = r * B.vertices[i] + t;
+    const std::size_t paddedFacesB =
+        (static_cast<std::size_t>(B.faceCount) + kHullArcPadding - 1) / kHullArcPadding * kHullArcPadding;
+    for (std::vector<float>& row : sc.normalRows)
+        if (row.size() < paddedFacesB) row.resize(paddedFacesB);
     for (int f = 0; f < B.faceCount; ++f) {
         nb[f] = r * B.normals[f];
         ob[f] = B.offsets[f] + dot(nb[f], t);
+        sc.normalRows[0][f] = nb[f].x, sc.normalRows[1][f] = nb[f].y, sc.normalRows[2][f] = nb[f].z;
     }
+    const float* rowsB[3] = {sc.normalRows[0].data(), sc.normalRows[1].data(), sc.normalRows[2].data()};
+    const float* rowsA[3] = {A.normalRows[0].data(), A.normalRows[1].data(), A.normalRows[2].data()};
     const Vec3* va = A.vertices;
     // Separation along a face axis of A (of B): the lowest vertex of B (of A) above the face's plane.
     const auto faceASeparation = [&](int f) {
@@ -250,22 +273,30 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     }
     if (hint) *hint = {};
 
-    // Face axes of A.
+    // Face axes of A, then of B, several faces at a time in SIMD lanes (the same arithmetic as the lambdas above);
+    // the faces are then read in order, so the first that separates and the best are those of a plain scan.
+    alignas(64) float lowestOnFace[simd::kLanes];
     float sepA = -INFINITY;
     int faceA = 0;
-    for (int f = 0; f < A.faceCount; ++f) {
-        const float sep = faceASeparation(f);
-        if (sep > margin) return separatedBy(SatHint::kFaceA, f, 0);  // the common exit, taken as soon as found
-        if (sep > sepA) sepA = sep, faceA = f;
+    for (int f0 = 0; f0 < A.faceCount; f0 += static_cast<int>(simd::kLanes)) {
+        lowestAlongFaces(rowsA, f0, vb, B.vertexCount, lowestOnFace);
+        for (int k = 0; k < static_cast<int>(simd::kLanes) && f0 + k < A.faceCount; ++k) {
+            const int f = f0 + k;
+            const float sep = lowestOnFace[k] - A.offsets[f];
+            if (sep > margin) return separatedBy(SatHint::kFaceA, f, 0);  // the common exit, taken as soon as found
+            if (sep > sepA) sepA = sep, faceA = f;
+        }
     }
-
-    // Face axes of B.
     float sepB = -INFINITY;
     int faceB = 0;
-    for (int f = 0; f < B.faceCount; ++f) {
-        const float sep = faceBSeparation(f);
-        if (sep > margin) return separatedBy(SatHint::kFaceB, f, 0);
-        if (sep > sepB) sepB = sep, faceB = f;
+    for (int f0 = 0; f0 < B.faceCount; f0 += static_cast<int>(simd::kLanes)) {
+        lowestAlongFaces(rowsB, f0, va, A.vertexCount, lowestOnFace);
+        for (int k = 0; k < static_cast<int>(simd::kLanes) && f0 + k < B.faceCount; ++k) {
+            const int f = f0 + k;
+            const float sep = lowestOnFace[k] - ob[f];
+            if (sep > margin) return separatedBy(SatHint::kFaceB, f, 0);
+            if (sep > sepB) sepB = sep, faceB = f;
+        }
     }
 
     const float absTol = kBoxAxisAbsoluteTolerance * maxf(A.size, B.size);
@@ -769,6 +800,13 @@ HullAdjacency buildHullAdjacency(const ConvexHull& hull) {
     for (const Vec3& p : hull.vertices) sum += p;
     adj.interior = nv > 0 ? sum / static_cast<float>(nv) : Vec3{};
     for (const Vec3& p : hull.vertices) adj.size = maxf(adj.size, length(p - adj.interior));
+    const std::size_t paddedFaces = (faces + kHullArcPadding - 1) / kHullArcPadding * kHullArcPadding;
+    for (std::vector<float>& row : adj.normalRows) row.assign(paddedFaces, 0.0f);
+    for (std::uint32_t f = 0; f < faces; ++f) {
+        adj.normalRows[0][f] = hull.faceNormals[f].x;
+        adj.normalRows[1][f] = hull.faceNormals[f].y;
+        adj.normalRows[2][f] = hull.faceNormals[f].z;
+    }
     const std::size_t padded = (adj.edges.size() + kHullArcPadding - 1) / kHullArcPadding * kHullArcPadding;
     for (std::vector<float>& row : adj.arcs) row.assign(padded, 0.0f);
     for (std::size_t e = 0; e < adj.edges.size(); ++e) {

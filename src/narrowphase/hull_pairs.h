@@ -89,6 +89,8 @@ struct HullAdjacency {
     /// `a`, face1 `b`) and their cross product b x a, the edge's arc on the Gauss map. Rows: ax ay az bx by bz cx cy
     /// cz. The SAT's edge-pair test reads them for the hull on side A, several edges at a time in SIMD lanes.
     std::vector<float> arcs[9];
+    /// The face normals in SoA rows x y z, padded like the arcs: the SAT's face tests take several faces at a time.
+    std::vector<float> normalRows[3];
 };
 /// The widest SIMD batch of any build of the core (AVX-512, 16 floats): the arcs are padded for every level.
 inline constexpr std::size_t kHullArcPadding = 16;
