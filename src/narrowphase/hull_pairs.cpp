@@ -114,6 +114,9 @@ HullView boxView(Vec3 half, Vec3 (&vertices)[8], float (&offsets)[6]) {
     return v;
 }
 
+/// n rounded up to whole rows of HullAdjacency's SoA data (kHullArcPadding).
+std::size_t paddedRow(std::size_t n) { return (n + kHullArcPadding - 1) / kHullArcPadding * kHullArcPadding; }
+
 /// Thread-local scratch (grown, never shrunk), so the kernels do not allocate in steady state.
 struct Scratch {
     std::vector<Vec3> vertices, normals, edgeDir, edgeCross;
@@ -225,30 +228,32 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     Vec3* nb = sc.normals.data();
     float* ob = sc.offsets.data();
     for (int i = 0; i < B.vertexCount; ++i) vb[i] = r * B.vertices[i] + t;
-    const std::size_t paddedFacesB =
-        (static_cast<std::size_t>(B.faceCount) + kHullArcPadding - 1) / kHullArcPadding * kHullArcPadding;
     for (std::vector<float>& row : sc.normalRows)
-        if (row.size() < paddedFacesB) row.resize(paddedFacesB);
+        if (row.size() < paddedRow(B.faceCount)) row.resize(paddedRow(B.faceCount));
     for (int f = 0; f < B.faceCount; ++f) {
         nb[f] = r * B.normals[f];
         ob[f] = B.offsets[f] + dot(nb[f], t);
         sc.normalRows[0][f] = nb[f].x, sc.normalRows[1][f] = nb[f].y, sc.normalRows[2][f] = nb[f].z;
     }
-    const float* rowsB[3] = {sc.normalRows[0].data(), sc.normalRows[1].data(), sc.normalRows[2].data()};
-    const float* rowsA[3] = {A.normalRows[0].data(), A.normalRows[1].data(), A.normalRows[2].data()};
     const Vec3* va = A.vertices;
-    // Separation along a face axis of A (of B): the lowest vertex of B (of A) above the face's plane.
-    const auto faceASeparation = [&](int f) {
-        const Vec3 n = A.normals[f];
-        float lo = INFINITY;
-        for (int i = 0; i < B.vertexCount; ++i) lo = minf(lo, dot(n, vb[i]));
-        return lo - A.offsets[f];
+    // The face axes of one hull against the other's vertices, a batch of faces at a time in SIMD lanes: the
+    // separation along face f is the lowest vertex above its plane.
+    struct FaceSide {
+        const float* const* rows;
+        const float* offsets;
+        int faceCount;
+        const Vec3* vertices;  ///< the other hull's, in A's frame
+        int vertexCount;
     };
-    const auto faceBSeparation = [&](int f) {
-        const Vec3 n = nb[f];
-        float lo = INFINITY;
-        for (int i = 0; i < A.vertexCount; ++i) lo = minf(lo, dot(n, va[i]));
-        return lo - ob[f];
+    const float* rowsA[3] = {A.normalRows[0].data(), A.normalRows[1].data(), A.normalRows[2].data()};
+    const float* rowsB[3] = {sc.normalRows[0].data(), sc.normalRows[1].data(), sc.normalRows[2].data()};
+    const FaceSide facesA{rowsA, A.offsets, A.faceCount, vb, B.vertexCount};
+    const FaceSide facesB{rowsB, ob, B.faceCount, va, A.vertexCount};
+    alignas(64) float lowestOnFace[simd::kLanes];
+    const auto faceSeparation = [&](const FaceSide& side, int f) {
+        const int f0 = f - f % static_cast<int>(simd::kLanes);
+        lowestAlongFaces(side.rows, f0, side.vertices, side.vertexCount, lowestOnFace);
+        return lowestOnFace[f - f0] - side.offsets[f];
     };
     const auto separatedBy = [&](SatHint::Kind kind, int a, int b) {
         if (hint) *hint = {kind, true, static_cast<std::uint16_t>(a), static_cast<std::uint16_t>(b)};
@@ -258,8 +263,8 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     // Last call's separating axis first: one axis instead of the search, when the pair is still apart along it.
     if (hint && hint->separated) {
         const int a = hint->a, b = hint->b;
-        if (hint->kind == SatHint::kFaceA && a < A.faceCount && faceASeparation(a) > margin) return false;
-        if (hint->kind == SatHint::kFaceB && a < B.faceCount && faceBSeparation(a) > margin) return false;
+        if (hint->kind == SatHint::kFaceA && a < A.faceCount && faceSeparation(facesA, a) > margin) return false;
+        if (hint->kind == SatHint::kFaceB && a < B.faceCount && faceSeparation(facesB, a) > margin) return false;
         if (hint->kind == SatHint::kEdges && a < A.edgeCount && b < B.edgeCount) {
             const EdgeOfA ea = edgeOfA(A, a);
             const HullEdge& eb = B.edges[b];
@@ -273,31 +278,24 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     }
     if (hint) *hint = {};
 
-    // Face axes of A, then of B, several faces at a time in SIMD lanes (the same arithmetic as the lambdas above);
-    // the faces are then read in order, so the first that separates and the best are those of a plain scan.
-    alignas(64) float lowestOnFace[simd::kLanes];
-    float sepA = -INFINITY;
-    int faceA = 0;
-    for (int f0 = 0; f0 < A.faceCount; f0 += static_cast<int>(simd::kLanes)) {
-        lowestAlongFaces(rowsA, f0, vb, B.vertexCount, lowestOnFace);
-        for (int k = 0; k < static_cast<int>(simd::kLanes) && f0 + k < A.faceCount; ++k) {
-            const int f = f0 + k;
-            const float sep = lowestOnFace[k] - A.offsets[f];
-            if (sep > margin) return separatedBy(SatHint::kFaceA, f, 0);  // the common exit, taken as soon as found
-            if (sep > sepA) sepA = sep, faceA = f;
+    // Face axes of A, then of B; the faces are read in order, so the first that separates and the best are those of
+    // a plain scan.
+    const auto scanFaces = [&](const FaceSide& side, SatHint::Kind kind, float& best, int& bestFace) {
+        best = -INFINITY, bestFace = 0;
+        for (int f0 = 0; f0 < side.faceCount; f0 += static_cast<int>(simd::kLanes)) {
+            lowestAlongFaces(side.rows, f0, side.vertices, side.vertexCount, lowestOnFace);
+            for (int k = 0; k < static_cast<int>(simd::kLanes) && f0 + k < side.faceCount; ++k) {
+                const float sep = lowestOnFace[k] - side.offsets[f0 + k];
+                if (sep > margin) return separatedBy(kind, f0 + k, 0);  // the common exit, taken as soon as found
+                if (sep > best) best = sep, bestFace = f0 + k;
+            }
         }
-    }
-    float sepB = -INFINITY;
-    int faceB = 0;
-    for (int f0 = 0; f0 < B.faceCount; f0 += static_cast<int>(simd::kLanes)) {
-        lowestAlongFaces(rowsB, f0, va, A.vertexCount, lowestOnFace);
-        for (int k = 0; k < static_cast<int>(simd::kLanes) && f0 + k < B.faceCount; ++k) {
-            const int f = f0 + k;
-            const float sep = lowestOnFace[k] - ob[f];
-            if (sep > margin) return separatedBy(SatHint::kFaceB, f, 0);
-            if (sep > sepB) sepB = sep, faceB = f;
-        }
-    }
+        return true;
+    };
+    float sepA, sepB;
+    int faceA, faceB;
+    if (!scanFaces(facesA, SatHint::kFaceA, sepA, faceA) || !scanFaces(facesB, SatHint::kFaceB, sepB, faceB))
+        return false;
 
     const float absTol = kBoxAxisAbsoluteTolerance * maxf(A.size, B.size);
     auto clearlyBetter = [&](float candidate, float current) {
@@ -800,15 +798,13 @@ HullAdjacency buildHullAdjacency(const ConvexHull& hull) {
     for (const Vec3& p : hull.vertices) sum += p;
     adj.interior = nv > 0 ? sum / static_cast<float>(nv) : Vec3{};
     for (const Vec3& p : hull.vertices) adj.size = maxf(adj.size, length(p - adj.interior));
-    const std::size_t paddedFaces = (faces + kHullArcPadding - 1) / kHullArcPadding * kHullArcPadding;
-    for (std::vector<float>& row : adj.normalRows) row.assign(paddedFaces, 0.0f);
+    for (std::vector<float>& row : adj.normalRows) row.assign(paddedRow(faces), 0.0f);
     for (std::uint32_t f = 0; f < faces; ++f) {
         adj.normalRows[0][f] = hull.faceNormals[f].x;
         adj.normalRows[1][f] = hull.faceNormals[f].y;
         adj.normalRows[2][f] = hull.faceNormals[f].z;
     }
-    const std::size_t padded = (adj.edges.size() + kHullArcPadding - 1) / kHullArcPadding * kHullArcPadding;
-    for (std::vector<float>& row : adj.arcs) row.assign(padded, 0.0f);
+    for (std::vector<float>& row : adj.arcs) row.assign(paddedRow(adj.edges.size()), 0.0f);
     for (std::size_t e = 0; e < adj.edges.size(); ++e) {
         const Vec3 a = hull.faceNormals[adj.edges[e].face0], b = hull.faceNormals[adj.edges[e].face1];
         const Vec3 c = cross(b, a);
