@@ -54,6 +54,7 @@ struct FrozenScene {
             if (!shapes.back().staticOnly())
                 table.set(static_cast<std::uint32_t>(shapes.size() - 1), shapeBoundsInfo(shapes.back()));
         }
+        TaskPool pool(1);
         for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
             const SceneBody& body = scene.bodies[b];
             const Transform pose = world.transform(ids[b]);
@@ -67,7 +68,7 @@ struct FrozenScene {
                 st.shape[i] = body.shape;
                 st.filterCategory[i] = body.def.filter.category;
                 st.filterMask[i] = body.def.filter.mask;
-                broad.staticAdded(id.index);
+                broad.staticAdded(id.index, storage, shapes, pool);
                 continue;
             }
             storage.allocate(BodySet::Moving, i);
@@ -85,10 +86,9 @@ struct FrozenScene {
             m.filterCategory[i] = body.def.filter.category;
             m.filterMask[i] = body.def.filter.mask;
         }
-        TaskPool pool(1);
         Bounds bounds;
         updateBounds(storage.moving, table, BoundsParams{params.dt, params.margin}, pool, bounds);
-        broad.findPairs(bounds, storage, shapes, BroadPhaseKind::Auto, pool, candidates);
+        broad.findPairs(bounds, storage, BroadPhaseKind::Auto, pool, candidates);
     }
 };
 

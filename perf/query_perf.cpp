@@ -156,7 +156,7 @@ void queryTreeBuild(benchmark::State& state) {
     for (auto _ : state) {
         detail::StaticBvh bvh;
         bvh.build(prims, pool);
-        benchmark::DoNotOptimize(bvh.mainTree().nodes.data());
+        benchmark::DoNotOptimize(bvh.trees()[0]->nodes.data());
     }
     state.SetItemsProcessed(std::int64_t(state.iterations()) * b.size());
 }
@@ -170,7 +170,7 @@ void queryTreeRefit(benchmark::State& state) {
         prims[i] = {{{b.minX[i], b.minY[i], b.minZ[i]}, {b.maxX[i], b.maxY[i], b.maxZ[i]}}, i, detail::kWholeBody};
     detail::StaticBvh bvh;
     bvh.build(prims, pool);
-    detail::StaticBvh::Tree tree = bvh.mainTree();
+    detail::StaticBvh::Tree tree = *bvh.trees()[0];
     for (auto _ : state) benchmark::DoNotOptimize(detail::refitTree(tree, b));
     state.SetItemsProcessed(std::int64_t(state.iterations()) * b.size());
 }

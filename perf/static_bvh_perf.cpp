@@ -56,7 +56,7 @@ void BM_StaticBvhBuild(benchmark::State& state) {
     StaticBvh bvh;
     for (auto _ : state) {
         bvh.build(prims, pool);
-        benchmark::DoNotOptimize(bvh.mainTree().nodes.data());
+        benchmark::DoNotOptimize(bvh.trees()[0]->nodes.data());
     }
     state.counters["triangles"] = double(prims.size());
     state.counters["nodes"] = double(bvh.stats().nodes);

@@ -28,7 +28,7 @@ constexpr const char* kUsage =
     "  --steps N     number of steps (default: the scene's own)\n"
     "  --threads T   worker threads (default: the scene's setting; 0 = all cores)\n"
     "  --broadphase  moving-pair algorithm: auto (picked from the scene), sap or grid (default: the scene's)\n"
-    "  --profile     print the per-stage table (median ms per step and share of the step)\n"
+    "  --profile     print the per-stage table (median ms per step, share of the step, worst step)\n"
     "  --trace FILE  write a Chrome trace-event JSON file (open it in Perfetto or chrome://tracing)\n"
     "  --hash        print a hash of the final state of all bodies\n"
     "  --realtime S  run the scene for S seconds of wall time through the Runtime (physics on its own thread at a\n"
@@ -147,6 +147,8 @@ double median(std::vector<double> v) {
     return 0.5 * (v[mid] + *std::max_element(v.begin(), v.begin() + mid));
 }
 
+double largest(const std::vector<double>& v) { return v.empty() ? 0 : *std::max_element(v.begin(), v.end()); }
+
 /// A one-line progress bar on stderr, only when stderr is a terminal.
 class ProgressBar {
 public:
@@ -182,16 +184,17 @@ std::string effectList(rubble::EffectSet set) {
 
 void printStageTable(const std::vector<std::vector<double>>& stageMs, const std::vector<double>& stepMs) {
     const double stepMedian = median(stepMs);
-    std::printf("\n%-22s %8s %12s %8s\n", "stage", "ran", "median ms", "share");
+    // The worst step shows hitches (a static tree built inside a step, a burst of contacts) that a median hides.
+    std::printf("\n%-22s %8s %12s %8s %12s\n", "stage", "ran", "median ms", "share", "worst ms");
     for (int k = 0; k < rubble::kStageCount; ++k) {
         const auto stage = static_cast<rubble::Stage>(k);
         // Continuous collision is a choice a scene makes: a scene without it has no row to show a zero in.
         if (stage == rubble::Stage::Ccd && stageMs[k].empty()) continue;
         const double m = median(stageMs[k]);
-        std::printf("%-22s %8zu %12.4f %7.1f%%\n", std::string(rubble::stageName(stage)).c_str(), stageMs[k].size(), m,
-                    stepMedian > 0 ? 100.0 * m / stepMedian : 0.0);
+        std::printf("%-22s %8zu %12.4f %7.1f%% %12.4f\n", std::string(rubble::stageName(stage)).c_str(),
+                    stageMs[k].size(), m, stepMedian > 0 ? 100.0 * m / stepMedian : 0.0, largest(stageMs[k]));
     }
-    std::printf("%-22s %8zu %12.4f %7.1f%%\n", "step", stepMs.size(), stepMedian, 100.0);
+    std::printf("%-22s %8zu %12.4f %7.1f%% %12.4f\n", "step", stepMs.size(), stepMedian, 100.0, largest(stepMs));
 }
 
 /// --realtime: the scene through the Runtime, with this thread standing in for a 60 Hz render loop.

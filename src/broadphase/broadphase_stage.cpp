@@ -111,63 +111,38 @@ BroadPhaseStage::BroadPhaseStage()
 
 BroadPhaseStage::~BroadPhaseStage() = default;
 
-void BroadPhaseStage::staticAdded(std::uint32_t slot) {
-    pendingAdds_.push_back(slot);
-    filtersDirty_ = true;
+void BroadPhaseStage::staticAdded(std::uint32_t slot, const BodyStorage& storage, const std::vector<Shape>& shapes,
+                                  TaskPool& pool) {
+    const StaticBodies& s = storage.statics;
+    const std::uint32_t i = storage.slots()[slot].dense;
+    const Transform pose{{s.px[i], s.py[i], s.pz[i]}, {s.qx[i], s.qy[i], s.qz[i], s.qw[i]}};
+    addedPrimitives_.clear();
+    appendStaticPrimitives(shapes[s.shape[i]], pose, slot, addedPrimitives_);
+    bvh_->insert(addedPrimitives_, pool);
+    staticFilterChanged(slot, s.filterCategory[i], s.filterMask[i]);
 }
 
-void BroadPhaseStage::staticRemoved(std::uint32_t slot) {
-    // A body added and removed between the same two steps never reaches the tree.
-    const auto pending = std::find(pendingAdds_.begin(), pendingAdds_.end(), slot);
-    if (pending != pendingAdds_.end())
-        pendingAdds_.erase(pending);
-    else
-        pendingRemoves_.push_back(slot);
-    filtersDirty_ = true;
+void BroadPhaseStage::staticRemoved(std::uint32_t slot) { bvh_->remove(slot); }
+
+void BroadPhaseStage::staticFilterChanged(std::uint32_t slot, std::uint32_t category, std::uint32_t mask) {
+    if (slot >= staticCategory_.size()) {
+        const std::size_t size = std::max(std::size_t(slot) + 1, 2 * staticCategory_.size());
+        staticCategory_.resize(size, 0);
+        staticMask_.resize(size, 0);
+    }
+    staticCategory_[slot] = category;
+    staticMask_[slot] = mask;
 }
 
 std::uint32_t BroadPhaseStage::staticPrimitiveCount() const { return bvh_->primitiveCount(); }
 
-const StaticBvh& BroadPhaseStage::staticBvh(const BodyStorage& storage, const std::vector<Shape>& shapes,
-                                            TaskPool& pool) {
-    applyStaticEdits(storage, shapes, pool);
+const StaticBvh& BroadPhaseStage::staticBvh(TaskPool& pool) {
     bvh_->commit(pool);
     return *bvh_;
 }
 
-void BroadPhaseStage::applyStaticEdits(const BodyStorage& storage, const std::vector<Shape>& shapes, TaskPool& pool) {
-    for (std::uint32_t slot : pendingRemoves_) bvh_->remove(slot);
-    pendingRemoves_.clear();
-    if (!pendingAdds_.empty()) {
-        std::vector<StaticPrimitive> primitives;
-        const StaticBodies& s = storage.statics;
-        for (std::uint32_t slot : pendingAdds_) {
-            const std::uint32_t i = storage.slots()[slot].dense;
-            const Transform pose{{s.px[i], s.py[i], s.pz[i]}, {s.qx[i], s.qy[i], s.qz[i], s.qw[i]}};
-            appendStaticPrimitives(shapes[s.shape[i]], pose, slot, primitives);
-        }
-        pendingAdds_.clear();
-        // The first time, one SAH build over everything; later additions go through the BVH's edit path.
-        if (bvh_->empty())
-            bvh_->build(std::move(primitives), pool);
-        else
-            bvh_->insert(primitives);
-    }
-    if (filtersDirty_) {
-        const auto& slots = storage.slots();
-        staticCategory_.assign(slots.size(), 0);
-        staticMask_.assign(slots.size(), 0);
-        for (std::uint32_t i = 0; i < storage.statics.size(); ++i) {
-            const std::uint32_t slot = storage.statics.slot[i];
-            staticCategory_[slot] = storage.statics.filterCategory[i];
-            staticMask_[slot] = storage.statics.filterMask[i];
-        }
-        filtersDirty_ = false;
-    }
-}
-
-void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage, const std::vector<Shape>& shapes,
-                                BroadPhaseKind requested, TaskPool& pool, CandidatePairs& out) {
+void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage, BroadPhaseKind requested,
+                                TaskPool& pool, CandidatePairs& out) {
     out.clear();
     const MovingBodies& bodies = storage.moving;
     PairFilter filter;
@@ -204,7 +179,6 @@ void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage
     lastKind_ = kind;
     sortPairs(out.moving, pool);
 
-    applyStaticEdits(storage, shapes, pool);
     if (!bvh_->empty() && moving.size() > 0) {
         StaticQueryFilter staticFilter;
         staticFilter.moving = filter;

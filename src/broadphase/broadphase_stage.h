@@ -17,6 +17,7 @@ class TaskPool;
 class SweepAndPrune;
 class MultiResolutionGrid;
 class StaticBvh;
+struct StaticPrimitive;
 
 /// What `auto` looks at: the expected number of boxes a sweep meets per body along the best axis. SAP wins while
 /// that stays small; the grid's cost per body does not depend on it.
@@ -67,15 +68,17 @@ public:
     BroadPhaseStage(const BroadPhaseStage&) = delete;
     BroadPhaseStage& operator=(const BroadPhaseStage&) = delete;
 
-    /// Static bodies changed between steps. Additions and removals edit the static BVH in place (no rebuild from
-    /// scratch); a moved static body is a removal plus an addition. Filter changes only refresh the filter table.
-    void staticAdded(std::uint32_t slot);
+    /// Static bodies changed between steps: the static BVH takes them in at once (a full batch of primitives is
+    /// built when it fills, so a large world pays for its tree while it is created, not in a step); a moved static
+    /// body is a removal plus an addition. The body's row in `storage` must be current.
+    void staticAdded(std::uint32_t slot, const BodyStorage& storage, const std::vector<Shape>& shapes, TaskPool& pool);
     void staticRemoved(std::uint32_t slot);
-    void staticFiltersChanged() { filtersDirty_ = true; }
+    /// A static body's collision filter changed.
+    void staticFilterChanged(std::uint32_t slot, std::uint32_t category, std::uint32_t mask);
 
     /// Candidate pairs for this step: moving-moving pairs from SAP or the grid, moving-static pairs from the BVH.
-    void findPairs(const Bounds& moving, const BodyStorage& storage, const std::vector<Shape>& shapes,
-                   BroadPhaseKind requested, TaskPool& pool, CandidatePairs& out);
+    void findPairs(const Bounds& moving, const BodyStorage& storage, BroadPhaseKind requested, TaskPool& pool,
+                   CandidatePairs& out);
 
     /// The algorithm the last call used for moving-moving pairs.
     BroadPhaseKind lastKind() const { return lastKind_; }
@@ -83,13 +86,11 @@ public:
     /// was the last step).
     const MultiResolutionGrid& grid() const { return *grid_; }
     std::uint32_t staticPrimitiveCount() const;
-    /// The static BVH with the static edits made since the last step applied and committed, for the scene queries
-    /// (src/query/), which then only read it. Not thread-safe: the queries call it under their own lock.
-    const StaticBvh& staticBvh(const BodyStorage& storage, const std::vector<Shape>& shapes, TaskPool& pool);
+    /// The static BVH with the static edits made since the last step committed, for the scene queries (src/query/)
+    /// and continuous collision, which then only read it. Not thread-safe: the queries call it under their own lock.
+    const StaticBvh& staticBvh(TaskPool& pool);
 
 private:
-    void applyStaticEdits(const BodyStorage& storage, const std::vector<Shape>& shapes, TaskPool& pool);
-
     std::unique_ptr<SweepAndPrune> sap_;
     std::unique_ptr<MultiResolutionGrid> grid_;
     std::unique_ptr<StaticBvh> bvh_;
@@ -97,9 +98,8 @@ private:
     BroadPhaseTimer timer_;
     bool estimated_ = false;
     std::uint32_t countAtEstimate_ = 0;
-    std::vector<std::uint32_t> pendingAdds_, pendingRemoves_;
     std::vector<std::uint32_t> staticCategory_, staticMask_;  ///< by static slot
-    bool filtersDirty_ = true;
+    std::vector<StaticPrimitive> addedPrimitives_;            ///< scratch of staticAdded
 };
 
 }  // namespace rubble::detail

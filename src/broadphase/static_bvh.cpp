@@ -1,12 +1,24 @@
-// Static BVH: binned-SAH build of a four-wide tree, stack-based box queries in parallel chunks, and the edit policy
-// (tombstones + secondary tree) described in static_bvh.h.
+// Static BVH: binned-SAH build of a four-wide tree, stack-based box queries in parallel chunks, and the forest of
+// parts with its background merges described in static_bvh.h.
 #include "broadphase/static_bvh.h"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
+#include <cmath>
+#include <condition_variable>
 #include <cstring>
+#include <deque>
+#include <functional>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
+
+#if defined(__linux__)
+#include <pthread.h>
+#include <sched.h>
+#endif
 
 #include "bounds/bounds.h"
 #include "core/parallel.h"
@@ -171,10 +183,12 @@ Node emptyNode() {
 /// With `deferred`, child ranges of at most `deferAtMost` primitives are recorded for a parallel pass instead of
 /// being expanded. Returns the deepest node level reached.
 std::uint32_t buildNodes(std::vector<BuildPrimitive>& prims, const BuildTask& root, AlignedVector<Node>& nodes,
-                         std::vector<BuildTask>* deferred, std::uint32_t deferAtMost) {
+                         std::vector<BuildTask>* deferred, std::uint32_t deferAtMost,
+                         const std::atomic<bool>* cancel = nullptr) {
     std::uint32_t depth = 0;
     std::vector<BuildTask> stack{root};
     while (!stack.empty()) {
+        if (cancel != nullptr && nodes.size() % 256 == 0 && cancel->load(std::memory_order_relaxed)) return depth;
         const BuildTask task = stack.back();
         stack.pop_back();
         const auto index = std::uint32_t(nodes.size());
@@ -215,9 +229,24 @@ std::uint32_t buildNodes(std::vector<BuildPrimitive>& prims, const BuildTask& ro
     return depth;
 }
 
-/// Builds `tree` over `primitives`. Large inputs build the top of the tree first, then the subtrees below it in
-/// parallel, each into its own array, appended in a fixed order: the result depends on the input alone.
-void buildTree(StaticBvh::Tree& tree, const std::vector<StaticPrimitive>& primitives, TaskPool& pool) {
+bool isPrimitive(std::uint32_t child) { return (child & kPrimitiveBit) != 0 && child != kUnusedLane; }
+
+void buildTreeUnlessCancelled(StaticBvh::Tree& tree, std::span<const StaticPrimitive> primitives, TaskPool* pool,
+                              const std::atomic<bool>* cancel);
+
+}  // namespace
+
+void StaticBvh::buildTree(Tree& tree, std::span<const StaticPrimitive> primitives, TaskPool* pool) {
+    buildTreeUnlessCancelled(tree, primitives, pool, nullptr);
+}
+
+namespace {
+
+/// Large inputs build the top of the tree first, then the subtrees below it in parallel, each into its own array,
+/// appended in a fixed order: the result depends on the input alone. A serial build stops early, leaving a tree
+/// to throw away, once `cancel` is set.
+void buildTreeUnlessCancelled(StaticBvh::Tree& tree, std::span<const StaticPrimitive> primitives, TaskPool* pool,
+                              const std::atomic<bool>* cancel) {
     tree.nodes.clear();
     tree.primitives.clear();
     tree.depth = 0;
@@ -236,8 +265,8 @@ void buildTree(StaticBvh::Tree& tree, const std::vector<StaticPrimitive>& primit
     }
 
     const BuildTask root{{0, n, all}, kNoParent, 0, 1};
-    if (n < kParallelBuildMin) {
-        tree.depth = buildNodes(prims, root, tree.nodes, nullptr, 0);
+    if (n < kParallelBuildMin || pool == nullptr) {
+        tree.depth = buildNodes(prims, root, tree.nodes, nullptr, 0, cancel);
     } else {
         // Subtree size cut: a function of n only (never of the thread count), giving some 64-128 tasks.
         const std::uint32_t cut = std::max<std::uint32_t>(4096, n / 64);
@@ -245,7 +274,7 @@ void buildTree(StaticBvh::Tree& tree, const std::vector<StaticPrimitive>& primit
         tree.depth = buildNodes(prims, root, tree.nodes, &jobs, cut);
         std::vector<AlignedVector<Node>> jobNodes(jobs.size());
         std::vector<std::uint32_t> jobDepth(jobs.size());
-        pool.forChunks(jobs.size(), 1, [&](std::size_t j, std::size_t, std::size_t, int) {
+        pool->forChunks(jobs.size(), 1, [&](std::size_t j, std::size_t, std::size_t, int) {
             BuildTask local = jobs[j];
             local.parent = kNoParent;
             // Jobs partition disjoint ranges of prims, so they never touch the same data.
@@ -269,8 +298,6 @@ void buildTree(StaticBvh::Tree& tree, const std::vector<StaticPrimitive>& primit
         tree.primitives[i] = {p.body, p.triangle};
     }
 }
-
-bool isPrimitive(std::uint32_t child) { return (child & kPrimitiveBit) != 0 && child != kUnusedLane; }
 
 /// A query box broadcast to the node row layout, in registers: lo = (minX x4, minY x4, minZ x4, minZ x4) and hi
 /// likewise, split into 16 / kLanes native vectors, so that lane k of (lo <= node.hi) & (node.lo <= hi) tests child
@@ -334,6 +361,12 @@ constexpr float kQueryGrowth = 0.125f;
 /// Contains no box: a body without kept hits.
 constexpr Aabb kNoBox{{kInf, kInf, kInf}, {-kInf, -kInf, -kInf}};
 
+/// Closed intervals, as the node test.
+bool boxesOverlap(const Aabb& a, const Aabb& b) {
+    return a.min.x <= b.max.x && b.min.x <= a.max.x && a.min.y <= b.max.y && b.min.y <= a.max.y && a.min.z <= b.max.z &&
+           b.min.z <= a.max.z;
+}
+
 bool contains(const Aabb& outer, const Aabb& inner) {
     return outer.min.x <= inner.min.x && outer.min.y <= inner.min.y && outer.min.z <= inner.min.z &&
            inner.max.x <= outer.max.x && inner.max.y <= outer.max.y && inner.max.z <= outer.max.z;
@@ -341,77 +374,385 @@ bool contains(const Aabb& outer, const Aabb& inner) {
 
 }  // namespace
 
-void StaticBvh::build(std::vector<StaticPrimitive> primitives, TaskPool& pool) {
-    ++generation_;
-    buildTree(main_, primitives, pool);
-    secondary_ = Tree{};
-    pending_.clear();
-    mainByBody_.clear();
-    mainByBodyValid_ = false;
-    tombstones_ = 0;
-    secondaryDirty_ = false;
+// ---- The forest of parts ----
+
+/// One built tree of the forest, with what its edits and merges need.
+struct StaticBvh::Part {
+    std::uint32_t id = 0;
+    Tree tree;
+    /// (body << 32) | (node * 4 + lane) of every primitive lane, sorted: where remove() finds a body's lanes.
+    std::vector<std::uint64_t> byBody;
+    /// The primitives it was built from, never changed: merges read them on their own threads.
+    std::shared_ptr<const std::vector<StaticPrimitive>> source;
+    std::vector<std::uint32_t> removed;  ///< bodies tombstoned in it; merges leave their primitives out
+    std::uint32_t tombstones = 0;        ///< lanes
+    bool merging = false;                ///< a merge in flight reads it
+
+    std::uint32_t size() const { return std::uint32_t(tree.primitives.size()); }
+    std::uint32_t live() const { return size() - tombstones; }
+};
+
+/// A merge in flight: its job reads `sources` and writes `result`, and touches nothing else.
+struct StaticBvh::Merge {
+    struct Work {
+        std::vector<std::shared_ptr<const std::vector<StaticPrimitive>>> sources;
+        std::vector<std::vector<std::uint32_t>> removed;  ///< per source, sorted
+        std::unique_ptr<Part> result;
+        std::atomic<bool> done{false};
+    };
+    std::shared_ptr<Work> work;
+    std::uint32_t tier = 0;
+    std::vector<std::uint32_t> sourceIds;
+    std::vector<std::uint32_t> removedSince;  ///< bodies removed from the sources after the merge began
+};
+
+/// A thread that runs jobs in order under the idle scheduling policy: it runs only on a core nothing else wants,
+/// and a step's thread that wakes takes its core at once (a low nice value was not enough: a worker woken for a
+/// parallel loop waited out the merge's time slice, 4 ms). It lives as long as the tree: starting a thread per
+/// merge would map a new stack inside the step. Its destructor drops the jobs not begun, cancels the running one
+/// and joins.
+class StaticBvh::BackgroundWorker {
+public:
+    using Job = std::function<void(const std::atomic<bool>& cancel)>;
+
+    BackgroundWorker() : thread_([this] { run(); }) {}
+    ~BackgroundWorker() {
+        std::deque<Job> dropped;
+        {
+            const std::lock_guard<std::mutex> lock(mutex_);
+            stop_ = true;
+            dropped.swap(jobs_);
+        }
+        cancel_.store(true, std::memory_order_relaxed);
+        wake_.notify_one();
+        thread_.join();
+    }
+    BackgroundWorker(const BackgroundWorker&) = delete;
+    BackgroundWorker& operator=(const BackgroundWorker&) = delete;
+
+    void post(Job job) {
+        {
+            const std::lock_guard<std::mutex> lock(mutex_);
+            jobs_.push_back(std::move(job));
+        }
+        wake_.notify_one();
+    }
+
+private:
+    void run();
+
+    std::mutex mutex_;
+    std::condition_variable wake_;
+    std::deque<Job> jobs_;
+    bool stop_ = false;
+    std::atomic<bool> cancel_{false};
+    std::thread thread_;  ///< last: it starts once the members above exist
+};
+
+namespace {
+
+constexpr std::uint32_t kNoPart = ~0u;
+constexpr std::uint32_t kPendingPart = ~0u - 1;
+
+/// Builds a part over `source` (its id is set by the caller).
+std::unique_ptr<StaticBvh::Part> makePart(std::shared_ptr<const std::vector<StaticPrimitive>> source, TaskPool* pool,
+                                          const std::atomic<bool>* cancel = nullptr) {
+    auto part = std::make_unique<StaticBvh::Part>();
+    buildTreeUnlessCancelled(part->tree, *source, pool, cancel);
+    if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) return part;
+    const StaticBvh::Tree& t = part->tree;
+    part->byBody.reserve(t.primitives.size());
+    for (std::size_t i = 0; i < t.nodes.size(); ++i)
+        for (int k = 0; k < 4; ++k)
+            if (const std::uint32_t c = t.nodes[i].child(k); isPrimitive(c))
+                part->byBody.push_back(std::uint64_t(t.primitives[c & ~kPrimitiveBit].body) << 32 |
+                                       (i * 4 + std::uint32_t(k)));
+    std::sort(part->byBody.begin(), part->byBody.end());
+    part->source = std::move(source);
+    return part;
 }
 
-void StaticBvh::insert(std::span<const StaticPrimitive> primitives) {
+/// Empties the lanes of `body` in `part`; returns whether it had any.
+bool tombstone(StaticBvh::Part& part, std::uint32_t body) {
+    const std::uint64_t first = std::uint64_t(body) << 32;
+    bool found = false;
+    for (auto it = std::lower_bound(part.byBody.begin(), part.byBody.end(), first);
+         it != part.byBody.end() && (*it >> 32) == body; ++it) {
+        StaticBvh::Node& node = part.tree.nodes[std::uint32_t(*it) / 4];
+        const int lane = int(std::uint32_t(*it) % 4);
+        if (!(node.lo[lane] <= node.hi[lane])) continue;  // tombstoned already
+        node.setBox(lane, Box{}.aabb());
+        ++part.tombstones;
+        found = true;
+    }
+    if (found) part.removed.push_back(body);
+    return found;
+}
+
+/// Tier of a part of `size` live primitives: sizes within a factor kMergeFanIn share a tier.
+std::uint32_t tierOf(std::uint32_t size) {
+    std::uint32_t tier = 0;
+    for (std::uint64_t bound = std::uint64_t(StaticBvh::kBatchPrimitives) * StaticBvh::kMergeFanIn; size >= bound;
+         bound *= StaticBvh::kMergeFanIn)
+        ++tier;
+    return tier;
+}
+
+void runAtIdlePriority() {
+#if defined(__linux__)
+    sched_param param{};
+    param.sched_priority = 0;
+    (void)pthread_setschedparam(pthread_self(), SCHED_IDLE, &param);
+#endif
+}
+
+/// The merge itself: the sources' primitives without their removed bodies, built into one part.
+void runMerge(StaticBvh::Merge::Work& work, const std::atomic<bool>& cancel) {
+    std::size_t total = 0;
+    for (const auto& s : work.sources) total += s->size();
+    auto merged = std::make_shared<std::vector<StaticPrimitive>>();
+    merged->reserve(total);
+    for (std::size_t s = 0; s < work.sources.size(); ++s) {
+        const std::vector<std::uint32_t>& removed = work.removed[s];
+        for (const StaticPrimitive& p : *work.sources[s])
+            if (!std::binary_search(removed.begin(), removed.end(), p.body)) merged->push_back(p);
+    }
+    std::unique_ptr<StaticBvh::Part> part = makePart(std::move(merged), nullptr, &cancel);
+    if (cancel.load(std::memory_order_relaxed)) return;
+    work.result = std::move(part);
+    work.done.store(true, std::memory_order_release);
+}
+
+float largestCoordinate(const StaticPrimitive& p) {
+    float m = 0;
+    for (const float c : {p.box.min.x, p.box.min.y, p.box.min.z, p.box.max.x, p.box.max.y, p.box.max.z})
+        if (std::isfinite(c)) m = std::max(m, std::fabs(c));
+    return m;
+}
+
+}  // namespace
+
+void StaticBvh::BackgroundWorker::run() {
+    runAtIdlePriority();
+    for (;;) {
+        Job job;
+        {
+            std::unique_lock<std::mutex> lock(mutex_);
+            wake_.wait(lock, [&] { return stop_ || !jobs_.empty(); });
+            if (jobs_.empty()) return;  // stopping, with nothing left to run
+            job = std::move(jobs_.front());
+            jobs_.pop_front();
+        }
+        job(cancel_);
+    }
+}
+
+StaticBvh::StaticBvh() = default;
+
+StaticBvh::~StaticBvh() { dropMerges(); }
+
+void StaticBvh::dropMerges() {
+    mergeWorkers_.clear();  // each runs its jobs left and joins
+    merges_.clear();
+    for (const std::unique_ptr<Part>& p : parts_) p->merging = false;
+}
+
+StaticBvh::BackgroundWorker& StaticBvh::workerFor(std::uint32_t tier) {
+    if (tier >= mergeWorkers_.size()) mergeWorkers_.resize(tier + 1);
+    if (!mergeWorkers_[tier]) mergeWorkers_[tier] = std::make_unique<BackgroundWorker>();
+    return *mergeWorkers_[tier];
+}
+
+void StaticBvh::build(std::vector<StaticPrimitive> primitives, TaskPool& pool) {
+    ++generation_;
+    dropMerges();
+    parts_.clear();
+    pending_.clear();
+    partOfBody_.clear();
+    mergedInto_.clear();
+    scale_ = 0;
+    for (const StaticPrimitive& p : primitives) scale_ = std::max(scale_, largestCoordinate(p));
+    for (const StaticPrimitive& p : primitives) {
+        if (p.body >= partOfBody_.size()) partOfBody_.resize(std::size_t(p.body) + 1, kNoPart);
+        partOfBody_[p.body] = kPendingPart;
+    }
+    pending_ = std::move(primitives);
+    flushPending(&pool);
+}
+
+void StaticBvh::insert(std::span<const StaticPrimitive> primitives, TaskPool& pool) {
     if (primitives.empty()) return;
     ++generation_;
     pending_.insert(pending_.end(), primitives.begin(), primitives.end());
-    secondaryDirty_ = true;
+    for (const StaticPrimitive& p : primitives) {
+        if (p.body >= partOfBody_.size())
+            partOfBody_.resize(std::max(std::size_t(p.body) + 1, 2 * partOfBody_.size()), kNoPart);
+        partOfBody_[p.body] = kPendingPart;
+        scale_ = std::max(scale_, largestCoordinate(p));
+    }
+    if (pending_.size() >= kBatchPrimitives) {
+        flushPending(&pool);
+        landFinishedMerges();
+        startDueMerges(true);
+    }
 }
 
 void StaticBvh::remove(std::uint32_t body) {
     ++generation_;
-    if (!main_.primitives.empty()) {
-        if (!mainByBodyValid_) {
-            mainByBody_.clear();
-            mainByBody_.reserve(main_.primitives.size());
-            for (std::size_t i = 0; i < main_.nodes.size(); ++i)
-                for (int k = 0; k < 4; ++k)
-                    if (const std::uint32_t c = main_.nodes[i].child(k); isPrimitive(c))
-                        mainByBody_.push_back(std::uint64_t(main_.primitives[c & ~kPrimitiveBit].body) << 32 |
-                                              (i * 4 + std::uint32_t(k)));
-            std::sort(mainByBody_.begin(), mainByBody_.end());
-            mainByBodyValid_ = true;
-        }
-        const std::uint64_t first = std::uint64_t(body) << 32;
-        for (auto it = std::lower_bound(mainByBody_.begin(), mainByBody_.end(), first);
-             it != mainByBody_.end() && (*it >> 32) == body; ++it) {
-            Node& node = main_.nodes[std::uint32_t(*it) / 4];
-            const int lane = int(std::uint32_t(*it) % 4);
-            if (!(node.lo[lane] <= node.hi[lane])) continue;  // removed before (the id may since have been reused)
-            node.setBox(lane, Box{}.aabb());
-            ++tombstones_;
-        }
+    if (body >= partOfBody_.size()) return;
+    const std::uint32_t id = partOfBody_[body];
+    partOfBody_[body] = kNoPart;
+    if (id == kNoPart) return;
+    if (id == kPendingPart) {
+        std::erase_if(pending_, [body](const StaticPrimitive& p) { return p.body == body; });
+        return;
     }
-    const std::size_t before = pending_.size();
-    std::erase_if(pending_, [body](const StaticPrimitive& p) { return p.body == body; });
-    secondaryDirty_ |= pending_.size() != before;
+    Part* part = findPart(id);
+    if (part == nullptr || !tombstone(*part, body) || !part->merging) return;
+    for (const std::unique_ptr<Merge>& m : merges_)
+        if (std::find(m->sourceIds.begin(), m->sourceIds.end(), part->id) != m->sourceIds.end())
+            m->removedSince.push_back(body);
 }
 
 void StaticBvh::commit(TaskPool& pool) {
-    const auto mainSize = std::uint64_t(main_.primitives.size());
-    const std::uint64_t live = mainSize - tombstones_;
-    if (std::uint64_t(tombstones_) * 4 > mainSize || std::uint64_t(pending_.size()) * 8 > live) {
-        if (tombstones_ > 0 || !pending_.empty()) rebuildMain(pool);
-    } else if (secondaryDirty_) {
-        buildTree(secondary_, pending_, pool);
-    }
-    secondaryDirty_ = false;
+    flushPending(&pool);
+    landFinishedMerges();
+    startDueMerges(true);
 }
 
-void StaticBvh::rebuildMain(TaskPool& pool) {
-    std::vector<StaticPrimitive> all;
-    all.reserve(main_.primitives.size() - tombstones_ + pending_.size());
-    for (const Node& node : main_.nodes) {
-        for (int k = 0; k < 4; ++k) {
-            const std::uint32_t c = node.child(k);
-            if (!isPrimitive(c) || !(node.lo[k] <= node.hi[k])) continue;  // not a primitive, or a tombstone
-            const PrimitiveRef& p = main_.primitives[c & ~kPrimitiveBit];
-            all.push_back({node.box(k), p.body, p.triangle});
+void StaticBvh::settle(TaskPool& pool) {
+    flushPending(&pool);
+    landFinishedMerges();
+    // Merges in flight are dropped and done again here: a test waiting on an idle-priority thread could wait for as
+    // long as other programs keep the cores busy.
+    dropMerges();
+    while (startDueMerges(false) > 0) landFinishedMerges();
+}
+
+void StaticBvh::flushPending(TaskPool* pool) {
+    if (pending_.empty()) return;
+    auto source = std::make_shared<const std::vector<StaticPrimitive>>(std::move(pending_));
+    pending_ = {};
+    std::unique_ptr<Part> part = makePart(std::move(source), pool);
+    part->id = std::uint32_t(mergedInto_.size());
+    mergedInto_.push_back(part->id);
+    for (const StaticPrimitive& p : *part->source) partOfBody_[p.body] = part->id;
+    addPart(std::move(part));
+}
+
+void StaticBvh::addPart(std::unique_ptr<Part> part) {
+    if (part->live() > 0) parts_.push_back(std::move(part));
+    refreshTreeViews();
+}
+
+StaticBvh::Part* StaticBvh::findPart(std::uint32_t id) {
+    while (mergedInto_[id] != id) id = mergedInto_[id];
+    for (const std::unique_ptr<Part>& p : parts_)
+        if (p->id == id) return p.get();
+    return nullptr;  // every primitive it had was removed, and it was dropped
+}
+
+void StaticBvh::landFinishedMerges() {
+    for (std::size_t i = 0; i < merges_.size();) {
+        Merge& m = *merges_[i];
+        if (!m.work->done.load(std::memory_order_acquire)) {
+            ++i;
+            continue;
+        }
+        std::unique_ptr<Part> result = std::move(m.work->result);
+        result->id = std::uint32_t(mergedInto_.size());
+        mergedInto_.push_back(result->id);
+        for (const std::uint32_t source : m.sourceIds) mergedInto_[source] = result->id;
+        std::vector<std::unique_ptr<Part>> replaced;
+        std::size_t replacedSize = 0;
+        for (std::unique_ptr<Part>& p : parts_)
+            if (std::find(m.sourceIds.begin(), m.sourceIds.end(), p->id) != m.sourceIds.end()) {
+                replacedSize += p->size();
+                replaced.push_back(std::move(p));
+            }
+        std::erase(parts_, nullptr);
+        for (const std::uint32_t body : m.removedSince) tombstone(*result, body);
+        addPart(std::move(result));
+        std::shared_ptr<Merge::Work> work = std::move(m.work);
+        merges_.erase(merges_.begin() + std::ptrdiff_t(i));
+        // Returning the memory of large parts to the system takes milliseconds (unmapping tens of megabytes), so
+        // it is done off the step too.
+        if (replacedSize >= kMergeFanIn * kBatchPrimitives * kMergeFanIn) {
+            auto doomed = std::make_shared<std::vector<std::unique_ptr<Part>>>(std::move(replaced));
+            workerFor(m.tier).post([doomed, w = std::move(work)](const std::atomic<bool>&) mutable {
+                doomed->clear();
+                w.reset();
+            });
         }
     }
-    all.insert(all.end(), pending_.begin(), pending_.end());
-    build(std::move(all), pool);
+}
+
+std::size_t StaticBvh::startDueMerges(bool background) {
+    // Parts of a tier wait until kMergeFanIn of them are idle; at most one merge per tier runs at a time, so a long
+    // merge of large parts never holds up the quick merges of small ones.
+    std::size_t started = 0;
+    std::vector<std::vector<Part*>> idleByTier;
+    std::vector<bool> tierBusy;
+    auto grow = [&](std::uint32_t tier) {
+        if (tier >= idleByTier.size()) idleByTier.resize(tier + 1), tierBusy.resize(tier + 1, false);
+    };
+    for (const std::unique_ptr<Part>& p : parts_) {
+        const std::uint32_t tier = tierOf(p->live());
+        grow(tier);
+        if (p->merging)
+            tierBusy[tier] = true;
+        else
+            idleByTier[tier].push_back(p.get());
+    }
+    for (std::uint32_t tier = 0; tier < idleByTier.size(); ++tier) {
+        if (tierBusy[tier]) continue;
+        std::vector<Part*>& idle = idleByTier[tier];
+        if (idle.size() >= kMergeFanIn) {
+            idle.resize(kMergeFanIn);  // the oldest, which were built first
+            startMerge(std::move(idle), tier, background);
+            ++started;
+            continue;
+        }
+        for (Part* p : idle)
+            if (std::uint64_t(p->tombstones) * 4 > p->size()) {
+                startMerge({p}, tier, background);
+                ++started;
+                break;
+            }
+    }
+    return started;
+}
+
+void StaticBvh::startMerge(std::vector<Part*> sources, std::uint32_t tier, bool background) {
+    auto merge = std::make_unique<Merge>();
+    merge->work = std::make_shared<Merge::Work>();
+    for (Part* p : sources) {
+        p->merging = true;
+        merge->sourceIds.push_back(p->id);
+        merge->work->sources.push_back(p->source);
+        std::vector<std::uint32_t> removed = p->removed;
+        std::sort(removed.begin(), removed.end());
+        merge->work->removed.push_back(std::move(removed));
+    }
+    merge->tier = tier;
+    if (background) {
+        workerFor(tier).post([work = merge->work](const std::atomic<bool>& cancel) { runMerge(*work, cancel); });
+    } else {
+        const std::atomic<bool> never{false};
+        runMerge(*merge->work, never);
+    }
+    merges_.push_back(std::move(merge));
+}
+
+void StaticBvh::refreshTreeViews() {
+    treeViews_.clear();
+    partBoxes_.clear();
+    for (const std::unique_ptr<Part>& p : parts_) {
+        treeViews_.push_back(&p->tree);
+        Box box;
+        for (int k = 0; k < 4; ++k) box.grow(toBox(p->tree.nodes[0].box(k)));
+        partBoxes_.push_back(box.aabb());
+    }
 }
 
 void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, TaskPool& pool,
@@ -422,12 +763,14 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
     meshPairs.clear();
     meshTriangles.clear();
     const std::uint32_t n = moving.size();
-    if (n == 0 || (main_.nodes.empty() && secondary_.nodes.empty())) return;
+    if (n == 0 || treeViews_.empty()) return;
 
     const std::size_t chunkCount = TaskPool::chunkCount(n, kQueryChunk);
     if (chunks_.size() < chunkCount) chunks_.resize(chunkCount);
     if (workers_.size() < std::size_t(pool.threadCount())) workers_.resize(std::size_t(pool.threadCount()));
-    const std::size_t stackSize = 3 * std::size_t(std::max(main_.depth, secondary_.depth)) + 1;
+    std::uint32_t depth = 0;
+    for (const Tree* tree : treeViews_) depth = std::max(depth, tree->depth);
+    const std::size_t stackSize = 3 * std::size_t(depth) + 1;
     for (WorkerScratch& w : workers_) w.stack.resize(std::max(w.stack.size(), stackSize));
 
     pool.forChunks(n, kQueryChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int worker) {
@@ -476,9 +819,12 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
                                                 {node.lo[lane], node.lo[4 + lane], node.lo[8 + lane]},
                                                 {node.hi[lane], node.hi[4 + lane], node.hi[8 + lane]}});
                     };
-                    walk(main_, q, scratch.stack.data(), keep);
-                    walk(secondary_, q, scratch.stack.data(), keep);
-                    // Tree order to the canonical order, whichever tree and leaf held them. Duplicates only arise
+                    // A part's box first: while merges catch up with a large load there are hundreds of parts,
+                    // and most lie far from the body.
+                    for (std::size_t part = 0; part < treeViews_.size(); ++part)
+                        if (boxesOverlap(partBoxes_[part], grown))
+                            walk(*treeViews_[part], q, scratch.stack.data(), keep);
+                    // Tree order to the canonical order, whichever part and leaf held them. Duplicates only arise
                     // from inserting the same primitive twice.
                     const auto found = out.keptNext.begin() + std::ptrdiff_t(walkFirst);
                     std::sort(found, out.keptNext.end(),
@@ -561,23 +907,32 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
 }
 
 std::uint32_t StaticBvh::primitiveCount() const {
-    return std::uint32_t(main_.primitives.size() - tombstones_ + pending_.size());
+    std::size_t count = pending_.size();
+    for (const std::unique_ptr<Part>& p : parts_) count += p->live();
+    return std::uint32_t(count);
 }
 
 StaticBvhStats StaticBvh::stats() const {
     StaticBvhStats s;
-    s.nodes = std::uint32_t(main_.nodes.size());
-    s.depth = main_.depth;
-    s.primitives = std::uint32_t(main_.primitives.size());
-    s.tombstones = tombstones_;
+    s.parts = std::uint32_t(parts_.size());
     s.pending = std::uint32_t(pending_.size());
-    if (main_.nodes.empty()) return s;
+    const Part* largest = nullptr;
+    for (const std::unique_ptr<Part>& p : parts_) {
+        s.merging += p->merging ? 1 : 0;
+        s.nodes += std::uint32_t(p->tree.nodes.size());
+        s.depth = std::max(s.depth, p->tree.depth);
+        s.primitives += p->size();
+        s.tombstones += p->tombstones;
+        if (largest == nullptr || p->size() > largest->size()) largest = p.get();
+    }
+    if (largest == nullptr || largest->tree.nodes.empty()) return s;
+    const Tree& tree = largest->tree;
     Box root;
-    for (int k = 0; k < 4; ++k) root.grow(toBox(main_.nodes[0].box(k)));
+    for (int k = 0; k < 4; ++k) root.grow(toBox(tree.nodes[0].box(k)));
     double rootArea = root.halfArea();
     if (!(rootArea > 0)) rootArea = 1;  // a flat or single-point set: weights become plain areas
     double cost = 1;                    // the root is always visited
-    for (const Node& n : main_.nodes)
+    for (const Node& n : tree.nodes)
         for (int k = 0; k < 4; ++k)
             if (n.child(k) != kUnusedLane) cost += toBox(n.box(k)).halfArea() / rootArea;
     s.sahCost = cost;

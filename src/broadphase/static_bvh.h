@@ -1,28 +1,36 @@
 #pragma once
 // Static BVH: the moving-vs-static half of the broad phase. Static bodies and every triangle of static meshes and
-// heightfields are primitives of one bounding volume hierarchy, built once with a binned surface area heuristic;
+// heightfields are primitives of bounding volume hierarchies built with a binned surface area heuristic;
 // each step the fattened boxes of the moving bodies are queried against it in parallel. Static-static pairs are
 // never formed. The same tree will serve ray casts, so its nodes are four-wide with their children's boxes stored
 // as SoA lanes: one node visit tests four boxes, for a query box and for a ray slab test alike.
 //
-// Edits between steps (bodies added or removed) never rebuild the main tree from scratch:
+// The tree is a forest of parts, so that no step ever pays for a large build (a million statics added at load, or
+// thousands edited between steps, would otherwise stall the step that first needs them):
+//  - insert() gathers primitives and builds them into a new part as soon as kBatchPrimitives are waiting: a world
+//    that adds a million statics pays for their tree while it adds them (about one build per primitive), and the
+//    next step builds at most the last batch.
 //  - remove() tombstones the body's primitives in place: their boxes become empty (min = +inf, max = -inf), so
 //    queries skip them without a check of their own; node bounds stay conservative.
-//  - insert() appends to a small secondary tree, rebuilt on the next commit() (O(k log k) for its k primitives).
-//  - commit() merges everything into a fresh main tree only when the secondary set exceeds 1/8 of the live main
-//    primitives, or tombstones exceed 1/4 of the main tree: a full build is paid once per n/8 inserted or n/4
-//    removed primitives, and the main tree's quality never drifts far from a fresh build's.
-// Results never depend on which tree holds a primitive: every query sorts its hits.
-//
+//  - Parts are merged off the step, on background threads of low priority: parts of similar size (a tier: sizes
+//    within a factor kMergeFanIn) are merged kMergeFanIn at a time into one of the next tier, and a part with more
+//    than a quarter of its lanes tombstoned is rebuilt alone. A merge reads only the parts' immutable primitive
+//    lists; the parts stay in use until the next commit() after it finished swaps its result in (removals made
+//    meanwhile are applied to the result then). So the forest holds O(kMergeFanIn log n) parts, every primitive is
+//    rebuilt O(log n) times in the background, and a step never waits for a merge.
+// Results never depend on which part holds a primitive (every query sorts its hits), so when a merge lands, which
+// depends on the machine's timing, never changes a result; merges do not change the content, so they keep the
+// queries' kept hits valid.
 // Queries are coherent across steps: a moving box is looked up grown by an eighth of its size, and the hits of the
-// grown box are kept with their boxes. While the body's box stays inside the grown one and the tree is unchanged,
-// its hits are those kept hits that overlap it: exactly the tree walk's answer (a primitive is reported when its
+// grown box are kept with their boxes. While the body's box stays inside the grown one and no edit was made,
+// its hits are those kept hits that overlap it: exactly the walk's answer (a primitive is reported when its
 // own box overlaps, and every ancestor's box holds its box), found without the walk's cache misses. Resting piles
 // walk the tree almost never.
 // A heightfield's primitives are its triangles, numbered as src/shapes/shape.h says (heightfieldTriangle).
 #include <array>
 #include <bit>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -55,22 +63,29 @@ struct StaticQueryFilter {
     const std::uint32_t* staticMask = nullptr;      ///< indexed by primitive body id
 };
 
-/// Shape of the main tree, for tests and the profiler.
+/// Shape of the forest, for tests and the profiler.
 struct StaticBvhStats {
-    std::uint32_t nodes = 0;
-    std::uint32_t depth = 0;       ///< node levels on the longest root-to-leaf path
-    std::uint32_t primitives = 0;  ///< main tree, tombstones included
+    std::uint32_t parts = 0;
+    std::uint32_t merging = 0;     ///< parts that a background merge is reading
+    std::uint32_t nodes = 0;       ///< of all parts
+    std::uint32_t depth = 0;       ///< node levels on the longest root-to-leaf path of any part
+    std::uint32_t primitives = 0;  ///< of all parts, tombstones included
     std::uint32_t tombstones = 0;
-    std::uint32_t pending = 0;  ///< primitives in the secondary tree
-    /// Expected cost of a random small query under the surface area heuristic: the root, plus the area of every
-    /// other node and of every primitive (a primitive lane that passes costs a report, as a node costs a visit),
-    /// each relative to the root's area.
+    std::uint32_t pending = 0;  ///< inserted primitives not yet in a part
+    /// Of the largest part: the expected cost of a random small query under the surface area heuristic: the root,
+    /// plus the area of every other node and of every primitive (a primitive lane that passes costs a report, as a
+    /// node costs a visit), each relative to the root's area.
     double sahCost = 0;
 };
 
 class StaticBvh {
 public:
     static constexpr std::uint32_t kQueryChunk = 256;  ///< moving bodies per parallel task (fixed: determinism)
+    /// Inserted primitives wait until there are this many, then become a part. The step builds the rest: at most
+    /// this many, some 0.3 ms.
+    static constexpr std::uint32_t kBatchPrimitives = 1024;
+    /// Parts merged at a time, and the size ratio between tiers.
+    static constexpr std::uint32_t kMergeFanIn = 8;
     /// child() of a lane that holds a primitive: the bit is set and the rest is its index in primitives().
     static constexpr std::uint32_t kPrimitiveBit = 1u << 31;
     /// child() of an unused lane (its box is empty: min = +inf, max = -inf, so no box or ray hits it).
@@ -91,6 +106,10 @@ public:
         Aabb box(int k) const { return {{lo[k], lo[4 + k], lo[8 + k]}, {hi[k], hi[4 + k], hi[8 + k]}}; }
         void setBox(int k, const Aabb& b);
     };
+    /// One part of the forest: a tree and what its edits and merges need, and a merge in flight (both defined in
+    /// static_bvh.cpp).
+    struct Part;
+    struct Merge;
     /// What a primitive lane refers to.
     struct PrimitiveRef {
         std::uint32_t body, triangle;
@@ -101,16 +120,29 @@ public:
         std::uint32_t depth = 0;               ///< node levels on the longest root-to-leaf path
     };
 
-    /// Replaces the whole content with `primitives`. Deterministic: the tree depends only on the input order and
-    /// values, never on the thread count (large inputs build independent subtrees in parallel).
+    StaticBvh();
+    ~StaticBvh();  ///< waits for the merges in flight
+    StaticBvh(const StaticBvh&) = delete;
+    StaticBvh& operator=(const StaticBvh&) = delete;
+
+    /// Builds `tree` over `primitives` (SAH, four-wide). Deterministic: the tree depends only on the input order and
+    /// values, never on the thread count; large inputs build independent subtrees in parallel on `pool`, and a null
+    /// pool builds on the calling thread.
+    static void buildTree(Tree& tree, std::span<const StaticPrimitive> primitives, TaskPool* pool);
+
+    /// Replaces the whole content with `primitives`, as one part built now (merges in flight are dropped).
     void build(std::vector<StaticPrimitive> primitives, TaskPool& pool);
-    /// Adds primitives between steps (all triangles of a new static mesh, or one box); takes effect at commit().
-    void insert(std::span<const StaticPrimitive> primitives);
+    /// Adds primitives (all triangles of a new static mesh, or one box). Queries see them after the next commit();
+    /// each full batch is built into a part at once, on `pool` when it is large.
+    void insert(std::span<const StaticPrimitive> primitives, TaskPool& pool);
     /// Removes every primitive of `body` (no effect if it has none); takes effect at once.
     void remove(std::uint32_t body);
-    /// Rebuilds the secondary tree after inserts, and merges into the main tree when the edit policy asks for it.
+    /// Builds the waiting primitives into a part, swaps in the merges that finished and starts the merges due.
     /// query() calls it; call it yourself before read-only use from several threads.
     void commit(TaskPool& pool);
+    /// Builds the waiting primitives and does every merge due (and the merges they make due) on this thread: the
+    /// forest a quiet world would settle into. For tests and benchmarks; the engine never waits for a merge.
+    void settle(TaskPool& pool);
 
     /// Every (moving body, static primitive) pair whose boxes overlap (closed intervals, as overlaps()), filtered.
     /// Whole bodies go to bodyPairs as {moving dense index, body id}; triangles are grouped into one MeshPair per
@@ -119,14 +151,16 @@ public:
     void query(const Bounds& moving, const StaticQueryFilter& filter, TaskPool& pool, std::vector<BodyPair>& bodyPairs,
                std::vector<MeshPair>& meshPairs, std::vector<std::uint32_t>& meshTriangles);
 
-    /// Live primitives (main and secondary, without tombstones, including inserts not yet committed).
+    /// Live primitives (tombstones left out, inserts not yet in a part counted).
     std::uint32_t primitiveCount() const;
     bool empty() const { return primitiveCount() == 0; }
     StaticBvhStats stats() const;
-    /// The main tree, for ray casts and tests; node 0 is the root (no nodes when empty). Call commit() first.
-    const Tree& mainTree() const { return main_; }
-    /// The tree of primitives inserted since the last merge (see commit()); queries must walk it too.
-    const Tree& secondaryTree() const { return secondary_; }
+    /// The tree of every part, for ray casts, sweeps and tests; node 0 of each is its root. Call commit() first;
+    /// valid until the next non-const call.
+    std::span<const Tree* const> trees() const { return treeViews_; }
+    /// The largest absolute coordinate of any primitive inserted since the last build(), for the queries' padding
+    /// (src/query/tree_queries.h). It never shrinks, so it does not depend on when merges land.
+    float scale() const { return scale_; }
 
 private:
     /// A primitive that a grown query box overlaps, with the primitive's box.
@@ -152,17 +186,31 @@ private:
         std::vector<std::uint32_t> stack;
     };
 
-    void rebuildMain(TaskPool& pool);
+    class BackgroundWorker;
 
-    Tree main_;
-    Tree secondary_;                        ///< built from pending_ at commit()
-    std::vector<StaticPrimitive> pending_;  ///< inserted since the last merge, in insertion order
-    /// (body << 32) | (node * 4 + lane) of every primitive lane of main_, sorted; built on the first remove() after
-    /// a build, so that building pays nothing for it.
-    std::vector<std::uint64_t> mainByBody_;
-    bool mainByBodyValid_ = false;
-    std::uint32_t tombstones_ = 0;
-    bool secondaryDirty_ = false;
+    BackgroundWorker& workerFor(std::uint32_t tier);
+    void flushPending(TaskPool* pool);
+    void addPart(std::unique_ptr<Part> part);
+    Part* findPart(std::uint32_t id);
+    void landFinishedMerges();
+    /// Starts the merges due (one per tier at a time), on the background workers or, for settle(), here.
+    std::size_t startDueMerges(bool background);
+    void startMerge(std::vector<Part*> sources, std::uint32_t tier, bool background);
+    void dropMerges();
+    void refreshTreeViews();
+
+    std::vector<std::unique_ptr<Part>> parts_;
+    std::vector<std::unique_ptr<Merge>> merges_;
+    std::vector<std::unique_ptr<BackgroundWorker>> mergeWorkers_;  ///< by tier: one merge per tier runs at a time
+    std::vector<const Tree*> treeViews_;
+    /// Each part's box as it was when the part came in (tombstones only shrink a part, so it stays conservative).
+    std::vector<Aabb> partBoxes_;
+    std::vector<StaticPrimitive> pending_;  ///< inserted, not yet in a part, in insertion order
+    /// By body: the id of the part that holds its primitives, kPendingPart or kNoPart.
+    std::vector<std::uint32_t> partOfBody_;
+    /// By part id: the part that absorbed it (itself while it lives).
+    std::vector<std::uint32_t> mergedInto_;
+    float scale_ = 0;
     std::uint64_t generation_ = 1;  ///< changes with every edit: kept query hits of another generation are stale
     std::vector<ChunkOutput> chunks_;
     std::vector<WorkerScratch> workers_;

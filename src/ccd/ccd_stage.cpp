@@ -79,8 +79,7 @@ void ContinuousCollision::run(BodyStorage& storage, const std::vector<Shape>& sh
     if (stats_.fastBodies == 0) return;
 
     std::fill(hit_.begin(), hit_.end(), std::uint8_t{0});
-    const Sweeps sweeps{shapes, extents, staticTree,
-                        std::max(treeScale(staticTree.mainTree()), treeScale(staticTree.secondaryTree())), linearSlop};
+    const Sweeps sweeps{shapes, extents, staticTree, staticTree.scale(), linearSlop};
     pool.forChunks(fast_.size(), kSweepChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t k = begin; k < end; ++k) hit_[fast_[k]] = sweepBody(fast_[k], storage, sweeps, nullptr);
     });
@@ -160,8 +159,7 @@ bool ContinuousCollision::sweepBody(std::uint32_t i, BodyStorage& storage, const
                                        std::fabs(hi.y), std::fabs(hi.z)}) +
                              sweeps.treeScale);
     const Vec3 grow{pad, pad, pad};
-    overlapTree(sweeps.staticTree.mainTree(), lo - grow, hi + grow, visit);
-    overlapTree(sweeps.staticTree.secondaryTree(), lo - grow, hi + grow, visit);
+    for (const StaticBvh::Tree* tree : sweeps.staticTree.trees()) overlapTree(*tree, lo - grow, hi + grow, visit);
     if (dynamicTargets)
         for (const std::uint32_t j : *dynamicTargets) {
             if (!filtersAccept(category, mask, m.filterCategory[j], m.filterMask[j])) continue;

@@ -48,7 +48,7 @@ private:
         const std::vector<Shape>& shapes;
         const ShapeBoundsTable& extents;
         const StaticBvh& staticTree;
-        float treeScale;  ///< of both static trees, for the query box's pad
+        float treeScale;  ///< StaticBvh::scale(), for the query box's pad
         float linearSlop;
     };
     /// One fast body's sweep; returns true when it moved back.

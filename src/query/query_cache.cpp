@@ -31,10 +31,9 @@ const QueryTrees& QueryCache::prepare(World::Impl& world) {
 }
 
 void QueryCache::update(World::Impl& world) {
-    const StaticBvh& bvh = world.broadPhase.staticBvh(world.bodies, world.shapes, *world.pool);
-    trees_.statics[0] = &bvh.mainTree();
-    trees_.statics[1] = &bvh.secondaryTree();
-    trees_.staticScale = std::max(treeScale(bvh.mainTree()), treeScale(bvh.secondaryTree()));
+    const StaticBvh& bvh = world.broadPhase.staticBvh(*world.pool);
+    trees_.statics = bvh.trees();
+    trees_.staticScale = bvh.scale();
 
     const std::uint32_t n = world.bodies.moving.size();
     if (n == 0) {
@@ -71,9 +70,7 @@ void QueryCache::build(StaticBvh::Tree& tree, std::uint32_t begin, World::Impl& 
             {{{boxes_.minX[i], boxes_.minY[i], boxes_.minZ[i]}, {boxes_.maxX[i], boxes_.maxY[i], boxes_.maxZ[i]}},
              i,
              kWholeBody});
-    StaticBvh builder;
-    builder.build(std::move(primitives), *world.pool);
-    tree = builder.mainTree();
+    StaticBvh::buildTree(tree, primitives, world.pool.get());
 }
 
 }  // namespace rubble::detail

@@ -16,6 +16,7 @@
 #include <atomic>
 #include <cstdint>
 #include <mutex>
+#include <span>
 
 #include "broadphase/broadphase.h"
 #include "broadphase/static_bvh.h"
@@ -25,9 +26,9 @@ namespace rubble::detail {
 
 /// The trees a query walks. Valid until the next non-const World call.
 struct QueryTrees {
-    /// Main and secondary tree of the static BVH; primitives name static bodies by slot.
-    const StaticBvh::Tree* statics[2] = {nullptr, nullptr};
-    float staticScale = 0;  ///< treeScale of the static trees
+    /// The static BVH's parts; primitives name static bodies by slot.
+    std::span<const StaticBvh::Tree* const> statics;
+    float staticScale = 0;  ///< StaticBvh::scale()
     /// Trees over the moving bodies' current boxes (the refitted one and the extra one of bodies added since it was
     /// built); primitives name moving bodies by dense index.
     const StaticBvh::Tree* moving[2] = {nullptr, nullptr};

@@ -105,7 +105,7 @@ void findContacts(World::Impl& w, StepContext& step) {
     }
     {
         const auto timer = step.time(Stage::BroadPhase);
-        w.broadPhase.findPairs(w.movingBounds, w.bodies, w.shapes, w.settings.broadPhase, step.pool, w.pairs);
+        w.broadPhase.findPairs(w.movingBounds, w.bodies, w.settings.broadPhase, step.pool, w.pairs);
     }
     profile.broadPhase = w.broadPhase.lastKind();
     profile.movingPairs = static_cast<std::uint32_t>(w.pairs.moving.size());
@@ -168,7 +168,7 @@ void finishContinuousCollision(World::Impl& w, StepContext& step) {
     if (!step.continuous) return;
     const auto timer = step.time(Stage::Ccd);
     static const std::vector<detail::BodyPair> kNoPairs;
-    w.ccd.run(w.bodies, w.shapes, w.shapeBounds, w.broadPhase.staticBvh(w.bodies, w.shapes, step.pool),
+    w.ccd.run(w.bodies, w.shapes, w.shapeBounds, w.broadPhase.staticBvh(step.pool),
               step.collided ? w.pairs.moving : kNoPairs, w.settings.solver.linearSlop, step.pool);
     step.profile.ccdBodies = w.ccd.stats().fastBodies;
     step.profile.ccdHits = w.ccd.stats().hits;

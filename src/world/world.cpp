@@ -155,7 +155,7 @@ BodyId World::createBody(const BodyDef& def) {
         s.userData[i] = def.userData;
         w.shapeUsers[def.shape.index] += 1;
         w.effectsDirty = true;
-        w.broadPhase.staticAdded(id.index);
+        w.broadPhase.staticAdded(id.index, w.bodies, w.shapes, *w.pool);
         return id;
     }
 
@@ -332,7 +332,7 @@ void World::setTransform(BodyId id, Vec3 position, Quat orientation) {
         b.px[i] = position.x, b.py[i] = position.y, b.pz[i] = position.z;
         b.qx[i] = q.x, b.qy[i] = q.y, b.qz[i] = q.z, b.qw[i] = q.w;
         w.broadPhase.staticRemoved(id.index);
-        w.broadPhase.staticAdded(id.index);
+        w.broadPhase.staticAdded(id.index, w.bodies, w.shapes, *w.pool);
         return;
     }
     w.wake(i);
@@ -396,7 +396,7 @@ void World::setFilter(BodyId id, CollisionFilter f) {
     if (s.set == BodySet::Static) {
         w.bodies.statics.filterCategory[s.dense] = f.category;
         w.bodies.statics.filterMask[s.dense] = f.mask;
-        w.broadPhase.staticFiltersChanged();
+        w.broadPhase.staticFilterChanged(id.index, f.category, f.mask);
         w.sleeping.wakeTouching(id.index, w.bodies, w.contactCache);
     } else {
         w.wake(s.dense);

@@ -25,6 +25,7 @@ struct TestWorld {
     ShapeBoundsTable table;
     std::vector<BodyId> moving, statics;
     std::mt19937 rng{17};
+    TaskPool editPool{1};  ///< for the static BVH's batch builds as bodies are added
 
     std::uint32_t addShape(const ShapeDef& def) {
         shapes.push_back(buildShape(def));
@@ -58,7 +59,7 @@ struct TestWorld {
         s.filterCategory[i] = category;
         s.filterMask[i] = ~0u;
         statics.push_back(id);
-        stage.staticAdded(id.index);
+        stage.staticAdded(id.index, storage, shapes, editPool);
         return id;
     }
 };
@@ -121,7 +122,7 @@ void checkStep(TestWorld& w, BroadPhaseStage& stage, BroadPhaseKind kind, TaskPo
     Bounds bounds;
     updateBounds(w.storage.moving, w.table, BoundsParams{1.0f / 60, 0.02f}, pool, bounds);
     CandidatePairs pairs;
-    stage.findPairs(bounds, w.storage, w.shapes, kind, pool, pairs);
+    stage.findPairs(bounds, w.storage, kind, pool, pairs);
 
     PairFilter filter;
     filter.category = w.storage.moving.filterCategory.data();
@@ -186,7 +187,7 @@ TEST(BroadPhaseStage, MatchesBruteForceWithChurnForEveryAlgorithm) {
                     const std::uint32_t i = w.storage.find(moved)->dense;
                     w.storage.statics.px[i] += 3;
                     stage.staticRemoved(moved.index);
-                    stage.staticAdded(moved.index);
+                    stage.staticAdded(moved.index, w.storage, w.shapes, w.editPool);
                 }
             }
         }

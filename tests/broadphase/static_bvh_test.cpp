@@ -323,6 +323,8 @@ TEST(StaticBvh, InsertAndRemoveBetweenQueriesWithoutRebuild) {
     StaticBvh bvh;
     bvh.build(all, pool);
     const std::uint32_t nodesAfterBuild = bvh.stats().nodes;
+    const StaticBvh::Tree* built = bvh.trees()[0];
+    auto builtTreeKept = [&] { return std::find(bvh.trees().begin(), bvh.trees().end(), built) != bvh.trees().end(); };
     const Bounds moving = randomBoxes(2000, 32, -3, 3, 9);
     auto check = [&](const char* when) {
         std::vector<StaticPrimitive> reference;
@@ -340,13 +342,16 @@ TEST(StaticBvh, InsertAndRemoveBetweenQueriesWithoutRebuild) {
     bvh.remove(1999);  // never present: no effect
     for (std::uint32_t b : {1500u, 1550u, 1600u, 51u}) {
         live[b] = bodyPrims(b);
-        bvh.insert(live[b]);
+        bvh.insert(live[b], pool);
     }
-    check("after small edits");
     StaticBvhStats s = bvh.stats();
-    EXPECT_EQ(s.nodes, nodesAfterBuild) << "small edits must not rebuild the main tree";
+    EXPECT_GT(s.pending, 0u) << "inserts wait for a batch or a commit";
+    check("after small edits");
+    s = bvh.stats();
+    EXPECT_TRUE(builtTreeKept()) << "small edits must not rebuild the built tree";
+    EXPECT_EQ(s.parts, 2u);
     EXPECT_GT(s.tombstones, 0u);
-    EXPECT_GT(s.pending, 0u);
+    EXPECT_EQ(s.pending, 0u);
 
     // Round 2: remove an inserted body and a reused id again; remove twice.
     for (std::uint32_t b : {1550u, 51u, 51u}) {
@@ -354,21 +359,26 @@ TEST(StaticBvh, InsertAndRemoveBetweenQueriesWithoutRebuild) {
         live[b].clear();
     }
     check("after removing inserted bodies");
-    EXPECT_EQ(bvh.stats().nodes, nodesAfterBuild);
+    EXPECT_TRUE(builtTreeKept());
 
-    // Round 3: many edits cross the merge thresholds; the merged tree is still exact and has no tombstones.
+    // Round 3: many edits cross the merge thresholds, which rebuild off the query: answers are exact while the
+    // merges run, and once they have landed, without tombstones.
     for (std::uint32_t b = 100; b < 600; ++b) {
         bvh.remove(b);
         live[b].clear();
     }
     for (std::uint32_t b = 1601; b < 1990; ++b) {
         live[b] = bodyPrims(b);
-        bvh.insert(live[b]);
+        bvh.insert(live[b], pool);
     }
     check("after large edits");
+    bvh.settle(pool);
+    check("after the merges landed");
     s = bvh.stats();
     EXPECT_EQ(s.tombstones, 0u);
     EXPECT_EQ(s.pending, 0u);
+    EXPECT_EQ(s.merging, 0u);
+    EXPECT_NE(s.nodes, nodesAfterBuild) << "a third of the built tree was removed: it is rebuilt";
 
     // Everything removed.
     for (std::uint32_t b = 0; b < live.size(); ++b) {
@@ -430,6 +440,56 @@ TEST(StaticBvh, KeptHitsFollowMovingBoxes) {
     EXPECT_GT(total, 40u * 1000);  // the boxes touch the terrain: the test means something
 }
 
+// A world that adds many statics one at a time (a level loading) builds its parts as it goes: a commit never has
+// more than a batch left to build. Background merges then fold the batches into fewer, larger parts; whatever state
+// they are in when a query runs, its answer is the brute force's, and removals made while a merge reads its parts
+// reach the merged part.
+TEST(StaticBvh, ForestBuiltWhileAddingAndMergedOffTheQuery) {
+    const Shape box = buildShape(BoxDef{{0.5f, 0.5f, 0.5f}});
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<float> u(-60, 60);
+    TaskPool pool(2);
+    StaticBvh bvh;
+    std::vector<std::vector<StaticPrimitive>> live(40000);
+    const Bounds moving = randomBoxes(1500, 64, -2, 2, 3);
+    auto check = [&](const char* when) {
+        std::vector<StaticPrimitive> reference;
+        for (const auto& p : live) reference.insert(reference.end(), p.begin(), p.end());
+        EXPECT_EQ(bvh.primitiveCount(), reference.size()) << when;
+        EXPECT_EQ(flatten(runQuery(bvh, moving, pool)), bruteForce(moving, reference)) << when;
+    };
+    auto add = [&](std::uint32_t body) {
+        live[body].clear();
+        appendStaticPrimitives(box, {{u(rng), 0.2f * u(rng), u(rng)}, {}}, body, live[body]);
+        bvh.insert(live[body], pool);
+    };
+    auto remove = [&](std::uint32_t body) {
+        bvh.remove(body);
+        live[body].clear();
+    };
+    for (std::uint32_t b = 0; b < 30000; ++b) {
+        add(b);
+        EXPECT_LT(bvh.stats().pending, StaticBvh::kBatchPrimitives);
+    }
+    EXPECT_GE(bvh.stats().parts, 3u) << "batches were built as the bodies came, and merges cannot all have landed";
+    check("after adding");
+    // Edits while merges may be running: removals of merged and unmerged bodies, re-used ids, new bodies.
+    for (int round = 0; round < 4; ++round) {
+        for (std::uint32_t b = std::uint32_t(round); b < 30000; b += 7) remove(b);
+        for (std::uint32_t b = std::uint32_t(round); b < 30000; b += 21) add(b);
+        for (std::uint32_t b = 30000 + 2000 * std::uint32_t(round); b < 32000 + 2000 * std::uint32_t(round); ++b)
+            add(b);
+        check("after a round of edits");
+    }
+    bvh.settle(pool);
+    check("after the merges landed");
+    const StaticBvhStats s = bvh.stats();
+    EXPECT_EQ(s.merging, 0u);
+    EXPECT_EQ(s.pending, 0u);
+    EXPECT_LT(s.parts, StaticBvh::kMergeFanIn * 3) << "a settled forest has fewer than kMergeFanIn parts per tier";
+    EXPECT_LE(std::uint64_t(s.tombstones) * 4, s.primitives);
+}
+
 TEST(StaticBvh, EmptyTreeAndEmptyQuery) {
     TaskPool pool(2);
     StaticBvh bvh;
@@ -438,7 +498,7 @@ TEST(StaticBvh, EmptyTreeAndEmptyQuery) {
     EXPECT_TRUE(r.bodies.empty() && r.meshes.empty() && r.triangles.empty());
     bvh.build({}, pool);
     EXPECT_TRUE(bvh.empty());
-    EXPECT_TRUE(bvh.mainTree().nodes.empty());
+    EXPECT_TRUE(bvh.trees().empty());
     r = runQuery(bvh, moving, pool);
     EXPECT_TRUE(r.bodies.empty() && r.meshes.empty());
 
@@ -465,7 +525,7 @@ TEST(StaticBvh, SameResultForOneAndTwoThreads) {
     StaticBvh a, b;
     a.build(prims, one);
     b.build(prims, two);
-    const StaticBvh::Tree &ta = a.mainTree(), &tb = b.mainTree();
+    const StaticBvh::Tree &ta = *a.trees()[0], &tb = *b.trees()[0];
     ASSERT_EQ(ta.nodes.size(), tb.nodes.size());
     EXPECT_EQ(std::memcmp(ta.nodes.data(), tb.nodes.data(), ta.nodes.size() * sizeof(StaticBvh::Node)), 0);
     ASSERT_EQ(ta.primitives.size(), tb.primitives.size());

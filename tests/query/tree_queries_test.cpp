@@ -108,8 +108,8 @@ TEST(QueryTrees, SweepsMatchBruteForce) {
     const std::vector<StaticPrimitive> prims = randomBoxes(3000, rng);
     StaticBvh bvh;
     bvh.build(prims, pool);
-    compareSweeps(bvh.mainTree(), prims, rng, {});
-    compareSweeps(bvh.mainTree(), prims, rng, {0.5f, 1.5f, 0.2f});
+    compareSweeps(*bvh.trees()[0], prims, rng, {});
+    compareSweeps(*bvh.trees()[0], prims, rng, {0.5f, 1.5f, 0.2f});
 }
 
 TEST(QueryTrees, RemovedPrimitivesAreNeverReported) {
@@ -123,12 +123,12 @@ TEST(QueryTrees, RemovedPrimitivesAreNeverReported) {
         bvh.remove(b);
         removed.insert(b);
     }
-    compareSweeps(bvh.mainTree(), prims, rng, {}, removed);
-    compareSweeps(bvh.mainTree(), prims, rng, {1, 1, 1}, removed);
+    compareSweeps(*bvh.trees()[0], prims, rng, {}, removed);
+    compareSweeps(*bvh.trees()[0], prims, rng, {1, 1, 1}, removed);
     for (int i = 0; i < 100; ++i) {
         std::set<std::uint32_t> got;
         const Vec3 c{float(i) - 50, 0, 0};
-        overlapTree(bvh.mainTree(), c - Vec3{5, 50, 50}, c + Vec3{5, 50, 50},
+        overlapTree(*bvh.trees()[0], c - Vec3{5, 50, 50}, c + Vec3{5, 50, 50},
                     [&](const StaticBvh::PrimitiveRef& p) { got.insert(p.body); });
         for (const std::uint32_t b : removed) EXPECT_FALSE(got.count(b));
     }
@@ -140,7 +140,7 @@ TEST(QueryTrees, OverlapsAndRefitsMatchBruteForce) {
     std::vector<StaticPrimitive> prims = randomBoxes(5000, rng);
     StaticBvh bvh;
     bvh.build(prims, pool);
-    StaticBvh::Tree tree = bvh.mainTree();
+    StaticBvh::Tree tree = *bvh.trees()[0];
     const double fresh = sahCost(tree);
     EXPECT_NEAR(fresh, bvh.stats().sahCost, 1e-6 * fresh);
 

@@ -19,6 +19,7 @@ struct StageScene {
     BodyStorage storage;
     std::vector<Shape> shapes;
     ShapeBoundsTable table;
+    TaskPool editPool{1};  ///< for the static BVH's batch builds as bodies are added
 
     std::uint32_t addShape(const ShapeDef& def) {
         shapes.push_back(buildShape(def));
@@ -53,7 +54,7 @@ struct StageScene {
         s.shape[i] = shape;
         s.filterCategory[i] = 1;
         s.filterMask[i] = ~0u;
-        stage.staticAdded(id.index);
+        stage.staticAdded(id.index, storage, shapes, editPool);
     }
 
     Transform poseOf(std::uint32_t i, bool isStatic) const {
@@ -76,7 +77,7 @@ inline Contacts runStages(StageScene& scene, BroadPhaseStage& broad, int threads
     TaskPool pool(threads);
     Bounds bounds;
     updateBounds(scene.storage.moving, scene.table, BoundsParams{1.0f / 60, margin}, pool, bounds);
-    broad.findPairs(bounds, scene.storage, scene.shapes, BroadPhaseKind::Auto, pool, candidates);
+    broad.findPairs(bounds, scene.storage, BroadPhaseKind::Auto, pool, candidates);
     NarrowPhaseStage narrow;
     Contacts contacts;
     narrow.run(candidates, scene.storage, scene.shapes, NarrowPhaseParams{margin, 1.0f / 60}, pool, contacts);
