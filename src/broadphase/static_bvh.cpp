@@ -552,7 +552,7 @@ StaticBvh::StaticBvh() = default;
 StaticBvh::~StaticBvh() { dropMerges(); }
 
 void StaticBvh::dropMerges() {
-    mergeWorkers_.clear();  // each runs its jobs left and joins
+    mergeWorkers_.clear();  // each drops the jobs not begun, cancels the running one and joins
     merges_.clear();
     for (const std::unique_ptr<Part>& p : parts_) p->merging = false;
 }
@@ -674,12 +674,13 @@ void StaticBvh::landFinishedMerges() {
         for (const std::uint32_t body : m.removedSince) tombstone(*result, body);
         addPart(std::move(result));
         std::shared_ptr<Merge::Work> work = std::move(m.work);
-        merges_.erase(merges_.begin() + std::ptrdiff_t(i));
+        const std::uint32_t tier = m.tier;
+        merges_.erase(merges_.begin() + std::ptrdiff_t(i));  // m is gone from here on
         // Returning the memory of large parts to the system takes milliseconds (unmapping tens of megabytes), so
         // it is done off the step too.
         if (replacedSize >= kMergeFanIn * kBatchPrimitives * kMergeFanIn) {
             auto doomed = std::make_shared<std::vector<std::unique_ptr<Part>>>(std::move(replaced));
-            workerFor(m.tier).post([doomed, w = std::move(work)](const std::atomic<bool>&) mutable {
+            workerFor(tier).post([doomed, w = std::move(work)](const std::atomic<bool>&) mutable {
                 doomed->clear();
                 w.reset();
             });
