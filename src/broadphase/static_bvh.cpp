@@ -403,7 +403,8 @@ struct StaticBvh::Merge {
     std::shared_ptr<Work> work;
     std::uint32_t tier = 0;
     std::vector<std::uint32_t> sourceIds;
-    std::vector<std::uint32_t> removedSince;  ///< bodies removed from the sources after the merge began
+    /// Per source: how many of its `removed` the merge left out; the ones after were removed while it ran.
+    std::vector<std::size_t> removedAtStart;
 };
 
 /// A thread that runs jobs in order under the idle scheduling policy: it runs only on a core nothing else wants,
@@ -567,29 +568,28 @@ void StaticBvh::build(std::vector<StaticPrimitive> primitives, TaskPool& pool) {
     ++generation_;
     dropMerges();
     parts_.clear();
-    pending_.clear();
     partOfBody_.clear();
     mergedInto_.clear();
     scale_ = 0;
-    for (const StaticPrimitive& p : primitives) scale_ = std::max(scale_, largestCoordinate(p));
-    for (const StaticPrimitive& p : primitives) {
-        if (p.body >= partOfBody_.size()) partOfBody_.resize(std::size_t(p.body) + 1, kNoPart);
-        partOfBody_[p.body] = kPendingPart;
-    }
     pending_ = std::move(primitives);
+    notePending(pending_);
     flushPending(&pool);
 }
 
-void StaticBvh::insert(std::span<const StaticPrimitive> primitives, TaskPool& pool) {
-    if (primitives.empty()) return;
-    ++generation_;
-    pending_.insert(pending_.end(), primitives.begin(), primitives.end());
+void StaticBvh::notePending(std::span<const StaticPrimitive> primitives) {
     for (const StaticPrimitive& p : primitives) {
         if (p.body >= partOfBody_.size())
             partOfBody_.resize(std::max(std::size_t(p.body) + 1, 2 * partOfBody_.size()), kNoPart);
         partOfBody_[p.body] = kPendingPart;
         scale_ = std::max(scale_, largestCoordinate(p));
     }
+}
+
+void StaticBvh::insert(std::span<const StaticPrimitive> primitives, TaskPool& pool) {
+    if (primitives.empty()) return;
+    ++generation_;
+    pending_.insert(pending_.end(), primitives.begin(), primitives.end());
+    notePending(primitives);
     if (pending_.size() >= kBatchPrimitives) {
         flushPending(&pool);
         landFinishedMerges();
@@ -607,11 +607,7 @@ void StaticBvh::remove(std::uint32_t body) {
         std::erase_if(pending_, [body](const StaticPrimitive& p) { return p.body == body; });
         return;
     }
-    Part* part = findPart(id);
-    if (part == nullptr || !tombstone(*part, body) || !part->merging) return;
-    for (const std::unique_ptr<Merge>& m : merges_)
-        if (std::find(m->sourceIds.begin(), m->sourceIds.end(), part->id) != m->sourceIds.end())
-            m->removedSince.push_back(body);
+    if (Part* part = findPart(id)) tombstone(*part, body);
 }
 
 void StaticBvh::commit(TaskPool& pool) {
@@ -665,13 +661,16 @@ void StaticBvh::landFinishedMerges() {
         for (const std::uint32_t source : m.sourceIds) mergedInto_[source] = result->id;
         std::vector<std::unique_ptr<Part>> replaced;
         std::size_t replacedSize = 0;
-        for (std::unique_ptr<Part>& p : parts_)
-            if (std::find(m.sourceIds.begin(), m.sourceIds.end(), p->id) != m.sourceIds.end()) {
-                replacedSize += p->size();
-                replaced.push_back(std::move(p));
-            }
+        for (std::unique_ptr<Part>& p : parts_) {
+            const auto source = std::find(m.sourceIds.begin(), m.sourceIds.end(), p->id);
+            if (source == m.sourceIds.end()) continue;
+            // Removed while the merge ran: the result still holds them.
+            const std::size_t done = m.removedAtStart[std::size_t(source - m.sourceIds.begin())];
+            for (std::size_t r = done; r < p->removed.size(); ++r) tombstone(*result, p->removed[r]);
+            replacedSize += p->size();
+            replaced.push_back(std::move(p));
+        }
         std::erase(parts_, nullptr);
-        for (const std::uint32_t body : m.removedSince) tombstone(*result, body);
         addPart(std::move(result));
         std::shared_ptr<Merge::Work> work = std::move(m.work);
         const std::uint32_t tier = m.tier;
@@ -730,6 +729,7 @@ void StaticBvh::startMerge(std::vector<Part*> sources, std::uint32_t tier, bool 
     for (Part* p : sources) {
         p->merging = true;
         merge->sourceIds.push_back(p->id);
+        merge->removedAtStart.push_back(p->removed.size());
         merge->work->sources.push_back(p->source);
         std::vector<std::uint32_t> removed = p->removed;
         std::sort(removed.begin(), removed.end());

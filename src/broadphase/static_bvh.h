@@ -12,7 +12,8 @@
 //    next step builds at most the last batch.
 //  - remove() tombstones the body's primitives in place: their boxes become empty (min = +inf, max = -inf), so
 //    queries skip them without a check of their own; node bounds stay conservative.
-//  - Parts are merged off the step, on background threads of low priority: parts of similar size (a tier: sizes
+//  - Parts are merged off the step, on background threads under the idle scheduling policy: parts of similar size (a
+//  tier: sizes
 //    within a factor kMergeFanIn) are merged kMergeFanIn at a time into one of the next tier, and a part with more
 //    than a quarter of its lanes tombstoned is rebuilt alone. A merge reads only the parts' immutable primitive
 //    lists; the parts stay in use until the next commit() after it finished swaps its result in (removals made
@@ -121,7 +122,7 @@ public:
     };
 
     StaticBvh();
-    ~StaticBvh();  ///< waits for the merges in flight
+    ~StaticBvh();  ///< cancels the merges in flight and joins their workers
     StaticBvh(const StaticBvh&) = delete;
     StaticBvh& operator=(const StaticBvh&) = delete;
 
@@ -189,6 +190,8 @@ private:
     class BackgroundWorker;
 
     BackgroundWorker& workerFor(std::uint32_t tier);
+    /// Marks the bodies of newly waiting primitives as pending and grows the scale.
+    void notePending(std::span<const StaticPrimitive> primitives);
     void flushPending(TaskPool* pool);
     void addPart(std::unique_ptr<Part> part);
     Part* findPart(std::uint32_t id);
