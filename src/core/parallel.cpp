@@ -23,7 +23,11 @@ namespace rubble::detail {
 
 struct TaskPool::Arena {
     tbb::task_arena arena;
-    explicit Arena(int threads) : arena(threads) {}
+    explicit Arena(int threads) : arena(threads) {
+        // TBB starts its worker threads the first time a parallel loop asks for them: without this, a world's first
+        // step pays for starting them (about 1 ms at two threads, in whichever stage first runs in parallel).
+        if (threads > 1) run(std::size_t(threads) * 16, [](std::size_t, int) {});
+    }
 
     void run(std::size_t chunks, FunctionRef<void(std::size_t, int)> chunk) {
         arena.execute([&] {
