@@ -2,6 +2,7 @@
 // against static triangles, on S3's terrain (100 x 100 cells, y = 2 sin(x / 8) cos(z / 8), 20,000 triangles).
 #include <benchmark/benchmark.h>
 
+#include <chrono>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -135,5 +136,54 @@ BENCHMARK(BM_StaticBvhQuerySmallBoxes)
     ->ArgNames({"threads", "resting"})
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
+
+/// Issue 19's static floor: side x side unit boxes added one at a time (as a level loads), then the first step's
+/// static work: the commit and a query of 100 boxes falling onto the middle. Time: the first step's part only (the
+/// hitch a player would see); the counter `add_us` is the cost per static body paid while adding.
+void BM_StaticFloorFirstStep(benchmark::State& state) {
+    const auto side = std::uint32_t(state.range(0));
+    TaskPool pool(int(state.range(1)));
+    std::vector<StaticPrimitive> floor;
+    floor.reserve(std::size_t(side) * side);
+    for (std::uint32_t i = 0; i < side; ++i)
+        for (std::uint32_t j = 0; j < side; ++j) {
+            const float x = float(i) - 0.5f * float(side), z = float(j) - 0.5f * float(side);
+            floor.push_back({{{x - 0.5f, -1, z - 0.5f}, {x + 0.5f, 0, z + 0.5f}}, i * side + j, kWholeBody});
+        }
+    // Spheres of radius 0.5 (boxes fattened to 0.55) just above the floor's top at y = 0, over its middle.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-20, 20);
+    Bounds falling;
+    falling.resize(100);
+    for (std::uint32_t i = 0; i < falling.size(); ++i) {
+        const float x = u(rng), z = u(rng);
+        falling.minX[i] = x - 0.55f, falling.maxX[i] = x + 0.55f, falling.minY[i] = -0.05f, falling.maxY[i] = 1.05f;
+        falling.minZ[i] = z - 0.55f, falling.maxZ[i] = z + 0.55f;
+    }
+    std::vector<BodyPair> bodies;
+    std::vector<MeshPair> meshes;
+    std::vector<std::uint32_t> triangles;
+    double addSeconds = 0;
+    for (auto _ : state) {
+        StaticBvh bvh;
+        const auto addBegin = std::chrono::steady_clock::now();
+        for (const StaticPrimitive& p : floor) bvh.insert({&p, 1}, pool);
+        const auto stepBegin = std::chrono::steady_clock::now();
+        bvh.query(falling, {}, pool, bodies, meshes, triangles);
+        const auto stepEnd = std::chrono::steady_clock::now();
+        benchmark::DoNotOptimize(bodies.data());
+        addSeconds += std::chrono::duration<double>(stepBegin - addBegin).count();
+        state.SetIterationTime(std::chrono::duration<double>(stepEnd - stepBegin).count());
+    }
+    state.counters["statics"] = double(floor.size());
+    state.counters["add_us"] = 1e6 * addSeconds / double(state.iterations()) / double(floor.size());
+    state.counters["pairs"] = double(bodies.size());
+}
+BENCHMARK(BM_StaticFloorFirstStep)
+    ->ArgsProduct({{316, 1000}, {1, 2}})
+    ->ArgNames({"side", "threads"})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(5)  // the timed part is short and the adding long: the default would run it thousands of times
+    ->UseManualTime();
 
 }  // namespace
