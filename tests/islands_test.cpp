@@ -1,6 +1,7 @@
 // The islands stage against a second algorithm: breadth-first search over the same graph gives the components, and
 // the canonical labels and rows follow from them directly. The parallel union-find must match it exactly, on any
-// thread count, with static, kinematic and frozen bodies in the graph and with extra (joint) edges.
+// thread count, with static, kinematic and frozen bodies in the graph and with extra (joint) edges. Only constrained
+// bodies (a side of a manifold or an extra edge) are in islands.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -61,11 +62,17 @@ Islands bruteForce(const Graph& g) {
             adjacent[p.a].push_back(p.b), adjacent[p.b].push_back(p.a);
     for (const auto& [a, b] : g.extra)
         if (joins(a) && joins(b)) adjacent[a].push_back(b), adjacent[b].push_back(a);
+    std::vector<bool> constrained(n, false);
+    for (const ContactPair& p : g.contacts.pairs) {
+        if (!p.aStatic) constrained[p.a] = true;
+        if (!p.bStatic) constrained[p.b] = true;
+    }
+    for (const auto& [a, b] : g.extra) constrained[a] = constrained[b] = true;
     Islands out;
     out.islandOf.assign(n, kNoIsland);
     std::vector<std::vector<std::uint32_t>> members;
     for (std::uint32_t s = 0; s < n; ++s) {
-        if (!joins(s) || out.islandOf[s] != kNoIsland) continue;
+        if (!joins(s) || !constrained[s] || out.islandOf[s] != kNoIsland) continue;
         const auto k = static_cast<std::uint32_t>(members.size());
         members.emplace_back();
         std::queue<std::uint32_t> open;
@@ -146,6 +153,21 @@ INSTANTIATE_TEST_SUITE_P(Sizes, IslandsAgainstBfs,
                          ::testing::Values(Size{0, 0, 0}, Size{1, 0, 0}, Size{5, 3, 0}, Size{60, 40, 10},
                                            Size{1000, 800, 0}, Size{1000, 0, 900}, Size{20000, 30000, 2000},
                                            Size{50000, 5000, 500}));
+
+// A build clears only what the last one listed: one builder and one output over graphs of other sizes and edges
+// (bodies added and removed between steps) must still match a fresh search every time.
+TEST(Islands, ReusedBuilderClearsWhatTheLastBuildListed) {
+    TaskPool pool(2);
+    IslandBuilder builder;
+    Islands got;
+    std::uint32_t seed = 10;
+    for (const Size size : {Size{20000, 15000, 500}, Size{5000, 200, 50}, Size{30000, 400, 0}, Size{30000, 30000, 0},
+                            Size{100, 0, 0}, Size{8000, 4000, 4000}}) {
+        const Graph g = randomGraph(size.bodies, size.manifolds, size.extra, ++seed);
+        builder.build(g.contacts, g.extra, g.bodies, pool, got);
+        expectSame(bruteForce(g), got, "reused");
+    }
+}
 
 TEST(Islands, ManifoldRowsFollowAppendedManifolds) {
     Graph g = randomGraph(300, 200, 0, 7);

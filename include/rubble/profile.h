@@ -62,7 +62,7 @@ struct Profile {
     /// Time of the joint solver's work inside the solver stage (rows, warm start, iterations), ms; the iterations of
     /// joints in blocks of small islands run in the blocks' tasks, and their time is summed over the threads.
     double jointMs = 0;
-    std::uint32_t islands = 0;         ///< islands of dynamic bodies (a body alone is an island), asleep included
+    std::uint32_t islands = 0;  ///< islands of dynamic bodies that touch or are jointed to something, asleep included
     std::uint32_t largestIsland = 0;   ///< bodies in the largest island
     std::uint32_t sleepingBodies = 0;  ///< bodies asleep after the step
     std::uint32_t ccdBodies = 0;       ///< fast bodies swept by continuous collision (Stage::Ccd)

@@ -5,6 +5,10 @@
 // one island. An island is the unit that falls asleep and wakes (islands_sleep.h), and the unit the solver can
 // schedule as one task.
 //
+// Only the bodies the step constrains are listed: those with a manifold or an extra edge. A body that touches
+// nothing is an island of its own that nothing reads (sleep handles such bodies by themselves), so a world of a
+// million sparse bodies pays for its contacts, not its bodies.
+//
 // The partition is unique; islands are labelled canonically so that nothing downstream depends on the thread count:
 // an island is named by its smallest dense body index, islands are numbered in the order of those names, and each
 // island's bodies and manifolds are listed in ascending index order.
@@ -13,7 +17,9 @@
 #include <utility>
 #include <vector>
 
+#include "broadphase/radix_sort.h"
 #include "contacts/contacts.h"
+#include "storage/aligned_vector.h"
 #include "storage/body_storage.h"
 
 namespace rubble::detail {
@@ -30,7 +36,9 @@ inline bool joinsIslands(std::uint8_t flags) { return (flags & (kFlagKinematic |
 
 /// The islands of one step, in canonical order (see above), as compressed rows.
 struct Islands {
-    std::vector<std::uint32_t> islandOf;       ///< per moving body (dense index): its island, or kNoIsland
+    /// Per moving body (dense index): its island, or kNoIsland (no manifold or edge, kinematic or frozen). Only the
+    /// listed bodies hold an island, so the next build clears just those.
+    std::vector<std::uint32_t> islandOf;
     std::vector<std::uint32_t> bodyStart;      ///< island k's bodies are bodies[bodyStart[k], bodyStart[k + 1])
     std::vector<std::uint32_t> bodies;         ///< dense indices, ascending within an island
     std::vector<std::uint32_t> manifoldStart;  ///< island k's manifolds are manifolds[manifoldStart[k], ...[k + 1])
@@ -44,10 +52,11 @@ struct Islands {
 
 class IslandBuilder {
 public:
-    /// Islands of the moving bodies joined by `contacts` and `extraEdges`, in parallel: a lock-free union-find that
-    /// links the larger root under the smaller by compare-and-swap (so every root is its island's smallest index,
-    /// whatever order the links happen in), islands numbered by parallel chunked prefix sums, then the rows by a
-    /// counting sort.
+    /// Islands of the moving bodies joined by `contacts` and `extraEdges`, in parallel: the constrained bodies are
+    /// listed as the edges are read, a lock-free union-find links the larger root under the smaller by
+    /// compare-and-swap (so every root is its island's smallest index, whatever order the links happen in), islands
+    /// are numbered by parallel chunked prefix sums, then the rows come from a counting sort. Every pass runs over
+    /// the edges or the constrained bodies, none over all bodies.
     void build(const Contacts& contacts, std::span<const IslandEdge> extraEdges, const MovingBodies& bodies,
                TaskPool& pool, Islands& out);
     /// The same result on one thread with a plain union-find: the reference the parallel build is tested and
@@ -58,9 +67,15 @@ public:
     static void assignManifolds(const Contacts& contacts, Islands& out);
 
 private:
+    /// Per moving body: its union-find parent. Every body is its own parent between builds (a build resets the
+    /// bodies it listed), so a build never initialises all of them.
     std::vector<std::uint32_t> parent_;
     std::vector<std::uint32_t> rank_;  ///< at a root: its island's number
     std::vector<std::uint32_t> chunkCounts_;
+    std::vector<std::vector<std::uint32_t>> chunkMembers_;  ///< per chunk of edges: the sides it listed
+    std::vector<std::uint32_t> members_;                    ///< the last build's constrained bodies, ascending
+    AlignedVector<std::uint64_t> sortItems_;
+    RadixSortScratch sortScratch_;
 };
 
 }  // namespace rubble::detail

@@ -104,16 +104,22 @@ void SleepingIslands::fallAsleep(const Islands& islands, const Contacts& contact
     if (touchedByKinematic_.size() != count) touchedByKinematic_.assign(count, 0);
     const float linearSq = settings.linearThreshold * settings.linearThreshold;
     const float angularSq = settings.angularThreshold * settings.angularThreshold;
-    pool.forChunks(m.size(), kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+    // A body in no island touches nothing (or is kinematic or frozen): it rests, and falls asleep, on its own.
+    chunkLone_.resize(TaskPool::chunkCount(m.size(), kBodyChunk));
+    pool.forChunks(m.size(), kBodyChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
+        std::vector<std::uint32_t>& lone = chunkLone_[c];
+        lone.clear();
         for (std::size_t i = begin; i < end; ++i) {
             const std::uint32_t island = islands.islandOf[i];
-            if (island == kNoIsland || (m.flags[i] & kFlagAsleep)) continue;
+            const bool alone = island == kNoIsland;
+            if ((alone && !joinsIslands(m.flags[i])) || (m.flags[i] & kFlagAsleep)) continue;
             const float v = m.vx[i] * m.vx[i] + m.vy[i] * m.vy[i] + m.vz[i] * m.vz[i];
             const float w = m.wx[i] * m.wx[i] + m.wy[i] * m.wy[i] + m.wz[i] * m.wz[i];
             const float reach = shapes.reach[m.shape[i]];
             const bool rests = v < linearSq && w < angularSq && w * reach * reach < linearSq &&
-                               (m.flags[i] & kFlagNoSleep) == 0 && !touchedByKinematic_[island];
+                               (m.flags[i] & kFlagNoSleep) == 0 && (alone || !touchedByKinematic_[island]);
             m.sleepTimer[i] = rests ? m.sleepTimer[i] + dt : 0.0f;
+            if (alone && m.sleepTimer[i] >= settings.timeToSleep) lone.push_back(static_cast<std::uint32_t>(i));
         }
     });
     std::vector<std::uint32_t> sleeping;
@@ -124,20 +130,25 @@ void SleepingIslands::fallAsleep(const Islands& islands, const Contacts& contact
         }
         return true;
     });
-    for (std::uint32_t k : sleeping) {
+    const auto newGroup = [&] {
         const std::uint32_t g = groupIds_.acquire().index;
         if (g == groups_.size()) groups_.emplace_back();
+        groups_[g].slots.clear();
+        groups_[g].manifolds.clear();
+        return g;
+    };
+    const auto putToSleep = [&](std::uint32_t i, std::uint32_t g) {
+        m.flags[i] |= kFlagAsleep;
+        m.vx[i] = m.vy[i] = m.vz[i] = m.wx[i] = m.wy[i] = m.wz[i] = 0;
+        m.sleepGroup[i] = g;
+        groups_[g].slots.push_back(m.slot[i]);
+        sleepingBodies_ += 1;
+    };
+    const auto sleepIsland = [&](std::uint32_t k) {
+        const std::uint32_t g = newGroup();
         Group& group = groups_[g];
-        group.slots.clear();
-        group.manifolds.clear();
-        for (std::uint32_t at = islands.bodyStart[k]; at < islands.bodyStart[k + 1]; ++at) {
-            const std::uint32_t i = islands.bodies[at];
-            m.flags[i] |= kFlagAsleep;
-            m.vx[i] = m.vy[i] = m.vz[i] = m.wx[i] = m.wy[i] = m.wz[i] = 0;
-            m.sleepGroup[i] = g;
-            group.slots.push_back(m.slot[i]);
-        }
-        sleepingBodies_ += islands.bodyStart[k + 1] - islands.bodyStart[k];
+        for (std::uint32_t at = islands.bodyStart[k]; at < islands.bodyStart[k + 1]; ++at)
+            putToSleep(islands.bodies[at], g);
         for (std::uint32_t at = islands.manifoldStart[k]; at < islands.manifoldStart[k + 1]; ++at) {
             const std::uint32_t c = islands.manifolds[at];
             const ContactPair& p = contacts.pairs[c];
@@ -152,7 +163,17 @@ void SleepingIslands::fallAsleep(const Islands& islands, const Contacts& contact
             std::copy_n(impulses.begin() + static_cast<std::ptrdiff_t>(c) * kMaxManifoldPoints, kMaxManifoldPoints,
                         kept.impulses);
         }
-    }
+    };
+    // Groups are made in the islands' canonical order, lone bodies among them by index (an island is named by its
+    // smallest body), as if each lone body were an island of its own.
+    std::size_t next = 0;
+    for (const std::vector<std::uint32_t>& lone : chunkLone_)
+        for (const std::uint32_t i : lone) {
+            for (; next < sleeping.size() && islands.bodies[islands.bodyStart[sleeping[next]]] < i; ++next)
+                sleepIsland(sleeping[next]);
+            putToSleep(i, newGroup());
+        }
+    for (; next < sleeping.size(); ++next) sleepIsland(sleeping[next]);
 }
 
 void SleepingIslands::wakeGroup(std::uint32_t g, BodyStorage& storage, std::vector<KeptManifold>& out) {

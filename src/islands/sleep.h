@@ -67,6 +67,7 @@ private:
     std::vector<KeptManifold> pendingWarmStarts_;
     std::vector<std::uint8_t> touchedByKinematic_;  ///< per island of the step: touches a moving kinematic body
     std::vector<std::vector<std::uint32_t>> chunkIslands_;
+    std::vector<std::vector<std::uint32_t>> chunkLone_;  ///< per chunk of bodies: those that fall asleep alone
     std::vector<KeptManifold> restored_;
     std::uint32_t sleepingBodies_ = 0;
 };

@@ -31,7 +31,7 @@ void NarrowPhaseStage::run(const CandidatePairs& candidates, const BodyStorage& 
                            Contacts& out) {
     tables_.prepare(shapes);
     hulls_.prepare(shapes);
-    rows_.write(storage.moving, pool);
+    rows_.write(storage.moving, candidates, pool);
     while (scratch_.size() < static_cast<std::size_t>(pool.threadCount()))
         scratch_.push_back(std::make_unique<Scratch>());
 

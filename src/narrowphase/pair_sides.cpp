@@ -1,5 +1,7 @@
 #include "narrowphase/pair_sides.h"
 
+#include <atomic>
+
 #include "core/parallel.h"
 #include "shapes/shape_extents.h"
 #include "simd/transpose.h"
@@ -11,6 +13,9 @@ static_assert(kPairRowFloats == simd::kRowFloats, "the batched gathers transpose
 namespace {
 /// Moving bodies per task when their rows are written.
 constexpr std::size_t kRowChunk = 1024;
+/// Pairs per task when their bodies are marked, and bodies per task when the marks are read.
+constexpr std::size_t kMarkChunk = 4096;
+constexpr std::size_t kMarkScanChunk = 65536;
 }  // namespace
 
 Vec3 sizeOf(const Shape& shape) {
@@ -39,20 +44,46 @@ void ShapeTables::prepare(const std::vector<Shape>& shapes) {
     }
 }
 
-void MovingRows::write(const MovingBodies& m, TaskPool& pool) {
+void MovingRows::writeRows(const MovingBodies& m, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+        float* p = pose.data() + i * kPairRowFloats;
+        float* v = motion.data() + i * kPairRowFloats;
+        p[kComX] = m.px[i], p[kComY] = m.py[i], p[kComZ] = m.pz[i];
+        p[kRotX] = m.qx[i], p[kRotY] = m.qy[i], p[kRotZ] = m.qz[i], p[kRotW] = m.qw[i];
+        p[kLocalComX] = m.lcx[i];
+        v[kVelX] = m.vx[i], v[kVelY] = m.vy[i], v[kVelZ] = m.vz[i];
+        v[kSpinX] = m.wx[i], v[kSpinY] = m.wy[i], v[kSpinZ] = m.wz[i];
+        v[kLocalComY] = m.lcy[i], v[kLocalComZ] = m.lcz[i];
+    }
+}
+
+void MovingRows::write(const MovingBodies& m, const CandidatePairs& candidates, TaskPool& pool) {
     const std::size_t n = m.size();
     pose.resize(n * kPairRowFloats);
     motion.resize(n * kPairRowFloats);
-    pool.forChunks(n, kRowChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+    const std::size_t sides = 2 * candidates.moving.size() + candidates.statics.size() + candidates.meshes.size();
+    if (sides >= n / 4) {
+        // Most bodies are in a pair: one streaming pass beats marking them.
+        pool.forChunks(n, kRowChunk,
+                       [&](std::size_t, std::size_t begin, std::size_t end, int) { writeRows(m, begin, end); });
+        return;
+    }
+    // Few bodies in pairs: mark them (the same byte may be set by two threads, hence atomic), then write the marked
+    // rows in a pass that reads one byte per body and clears it.
+    inPair_.resize(n, 0);
+    const auto mark = [&](std::uint32_t i) {
+        std::atomic_ref<std::uint8_t>(inPair_[i]).store(1, std::memory_order_relaxed);
+    };
+    pool.forChunks(candidates.moving.size(), kMarkChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t k = begin; k < end; ++k) mark(candidates.moving[k].a), mark(candidates.moving[k].b);
+    });
+    for (const BodyPair& p : candidates.statics) mark(p.a);
+    for (const MeshPair& p : candidates.meshes) mark(p.moving);
+    pool.forChunks(n, kMarkScanChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t i = begin; i < end; ++i) {
-            float* p = pose.data() + i * kPairRowFloats;
-            float* v = motion.data() + i * kPairRowFloats;
-            p[kComX] = m.px[i], p[kComY] = m.py[i], p[kComZ] = m.pz[i];
-            p[kRotX] = m.qx[i], p[kRotY] = m.qy[i], p[kRotZ] = m.qz[i], p[kRotW] = m.qw[i];
-            p[kLocalComX] = m.lcx[i];
-            v[kVelX] = m.vx[i], v[kVelY] = m.vy[i], v[kVelZ] = m.vz[i];
-            v[kSpinX] = m.wx[i], v[kSpinY] = m.wy[i], v[kSpinZ] = m.wz[i];
-            v[kLocalComY] = m.lcy[i], v[kLocalComZ] = m.lcz[i];
+            if (!inPair_[i]) continue;
+            inPair_[i] = 0;
+            writeRows(m, i, i + 1);
         }
     });
 }

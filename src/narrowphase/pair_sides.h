@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "broadphase/broadphase.h"
 #include "contacts/contacts.h"
 #include "narrowphase/convex_pairs.h"
 #include "shapes/shape.h"
@@ -30,9 +31,10 @@ struct ShapeTables {
 /// The size columns of ShapeTables for a shape (see there).
 Vec3 sizeOf(const Shape& shape);
 
-/// Each moving body's pose and motion as two rows of eight floats, copied from the SoA storage at the start of every
-/// run. A pair reads two cache lines per body instead of one per field, and a SIMD batch of pairs takes each side in
-/// two row transposes instead of sixteen gathers.
+/// The pose and motion of each moving body in a candidate pair as two rows of eight floats (indexed by dense index),
+/// copied from the SoA storage at the start of every run. A pair reads two cache lines per body instead of one per
+/// field, and a SIMD batch of pairs takes each side in two row transposes instead of sixteen gathers. Rows of bodies
+/// in no pair are left stale: nothing reads them.
 struct MovingRows {
     /// Per body: centre of mass x y z, orientation x y z w, local centre of mass x (the shape origin is the centre of
     /// mass less the rotated local centre).
@@ -40,7 +42,13 @@ struct MovingRows {
     /// Per body: linear velocity x y z, angular velocity x y z, local centre of mass y z.
     AlignedVector<float> motion;
 
-    void write(const MovingBodies& bodies, TaskPool& pool);
+    /// Writes the rows of the candidates' moving bodies: every row when the pairs touch about as many bodies as
+    /// there are, else only the marked ones (a million sparse bodies with ten thousand pairs pay for the pairs).
+    void write(const MovingBodies& bodies, const CandidatePairs& candidates, TaskPool& pool);
+
+private:
+    void writeRows(const MovingBodies& bodies, std::size_t begin, std::size_t end);
+    std::vector<std::uint8_t> inPair_;  ///< per moving body, while writing: in a candidate pair (else all zero)
 };
 
 /// Columns of MovingRows' pose and motion rows.

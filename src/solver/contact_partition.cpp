@@ -143,7 +143,12 @@ void ContactSolver::splitIntoSlabs(const Contacts& contacts, const MovingBodies&
 }
 
 void ContactSolver::assignRows(const Contacts& contacts, const Islands* islands, const MovingBodies& m, bool anyHeld) {
-    solverIndex_.assign(m.size(), -1);
+    // Only the last prepare's bodies hold a row: clear theirs rather than one entry per moving body (a million sparse
+    // bodies with a few thousand in contact). Bodies may have moved or gone since; the entries are cleared whoever
+    // holds them now.
+    for (const std::uint32_t dense : bodies_.moving)
+        if (dense < solverIndex_.size()) solverIndex_[dense] = -1;
+    solverIndex_.resize(m.size(), -1);
     bodies_.moving.clear();
     const std::size_t segmentCount = segmentStart_.size() - 1;
     segmentRows_.assign(segmentCount, {});
