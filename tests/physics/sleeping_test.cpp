@@ -223,6 +223,32 @@ TEST(Sleeping, APileSleepsAsAUnit) {
     EXPECT_TRUE(world.isAwake(slabId));
 }
 
+// Bodies that touch nothing are in no island of the step; they still rest, fall asleep each on its own, and wake when
+// something hits them.
+TEST(Sleeping, ABodyTouchingNothingSleepsAloneAndWakesWhenHit) {
+    WorldSettings settings = sleepySettings();
+    settings.effects = settings.effects.without(Effect::Gravity);
+    World world(settings);
+    const BodyId floating = addBox(world, {0, 5, 0});
+    const BodyId other = addBox(world, {10, 5, 0});
+    // At rest from the start, it sleeps once its timer reaches timeToSleep (to float rounding of the summed steps).
+    const float t = timeToFallAsleep(world, floating, 2.0f);
+    ASSERT_NEAR(t, world.settings().sleep.timeToSleep, 1.5f * kDt);
+    EXPECT_FALSE(world.isAwake(other));
+    EXPECT_EQ(world.lastProfile().sleepingBodies, 2u);
+    EXPECT_EQ(world.lastProfile().islands, 0u);  // nothing touches anything
+    // A ball thrown at the sleeping box wakes it (and only it) and moves it.
+    BodyDef ball;
+    ball.shape = world.createShape(SphereDef{0.25f});
+    ball.position = {-3, 5, 0};
+    ball.linearVelocity = {6, 0, 0};
+    world.createBody(ball);
+    steps(world, 60);
+    EXPECT_GT(distance(world.transform(floating).position, {0, 5, 0}), 0.01f);
+    EXPECT_FALSE(world.isAwake(other));
+    EXPECT_EQ(world.transform(other).position, (Vec3{10, 5, 0}));
+}
+
 TEST(Sleeping, AMovingKinematicBodyKeepsWhatItCarriesAwake) {
     World world(sleepySettings());
     const BodyId platform = addBox(world, {0, 0.5f, 0}, BodyType::Kinematic);
