@@ -42,8 +42,8 @@ struct MovingRows {
     /// Per body: linear velocity x y z, angular velocity x y z, local centre of mass y z.
     AlignedVector<float> motion;
 
-    /// Writes the rows of the candidates' moving bodies: every row when the pairs touch about as many bodies as
-    /// there are, else only the marked ones (a million sparse bodies with ten thousand pairs pay for the pairs).
+    /// Writes the rows of the candidates' moving bodies: every row when the pairs' sides number a quarter of the
+    /// bodies or more, else only theirs (a million sparse bodies with forty thousand pairs pay for the pairs).
     void write(const MovingBodies& bodies, const CandidatePairs& candidates, TaskPool& pool);
 
 private:
