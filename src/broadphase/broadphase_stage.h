@@ -24,6 +24,9 @@ struct StaticPrimitive;
 struct BroadPhaseChoice {
     BroadPhaseKind kind = BroadPhaseKind::SweepAndPrune;
     float sweepCandidatesPerBody = 0;
+    /// The estimate lies so far from the threshold that timing the other algorithm cannot pay: S4 (540 boxes a sweep)
+    /// or a million sparse bodies (2,600), where one trial step of SAP took 0.56 s against the grid's 68 ms.
+    bool decisive = false;
 };
 
 /// Picks SAP or the grid for these boxes. `current` adds hysteresis so the choice does not flip every step.
@@ -31,7 +34,8 @@ struct BroadPhaseChoice {
 BroadPhaseChoice chooseBroadPhase(const Bounds& bounds, BroadPhaseKind current, TaskPool& pool);
 
 /// `auto` by measurement. The estimate (chooseBroadPhase) picks at first and whenever the body count moves by an
-/// eighth; after that, every kTrialPeriod steps the other algorithm runs for kTrialSteps steps, and it stays if its
+/// eighth; after that, unless the estimate was decisive, every kTrialPeriod steps the other algorithm runs for
+/// kTrialSteps steps, and it stays if its
 /// time (the median of the steps after its first two, which rebuild SAP's kept order) beats the running average of
 /// the one in use by a tenth. The estimate gets the common cases right, but not all of them: on the standard scenes
 /// SAP is faster on S1, S2 and S3 and the grid on S5 and S6, with estimates that do not separate them (S1 189, S3
@@ -43,8 +47,9 @@ public:
     static constexpr std::uint32_t kTrialSteps = 6;
     static constexpr std::uint32_t kTrialWarmup = 2;
 
-    /// The algorithm to run this step, given the estimate's pick when it was asked again (else nullopt).
-    BroadPhaseKind next(std::optional<BroadPhaseKind> estimate);
+    /// The algorithm to run this step, given the estimate's pick when it was asked again (else nullopt). No trial
+    /// starts while `mayTry` is false (the last estimate was decisive).
+    BroadPhaseKind next(std::optional<BroadPhaseKind> estimate, bool mayTry = true);
     /// How long the moving-pair search of this step took, ms.
     void record(double ms);
     BroadPhaseKind inUse() const { return inUse_; }
@@ -97,6 +102,7 @@ private:
     BroadPhaseKind lastKind_ = BroadPhaseKind::SweepAndPrune;
     BroadPhaseTimer timer_;
     bool estimated_ = false;
+    bool estimateDecisive_ = false;
     std::uint32_t countAtEstimate_ = 0;
     std::vector<std::uint32_t> staticCategory_, staticMask_;  ///< by static slot
     std::vector<StaticPrimitive> addedPrimitives_;            ///< scratch of staticAdded

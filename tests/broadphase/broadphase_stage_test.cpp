@@ -234,6 +234,17 @@ TEST(BroadPhaseTimer, TriesTheOtherAlgorithmNowAndThenAndKeepsTheFasterOne) {
     EXPECT_EQ(timer.inUse(), BroadPhaseKind::SweepAndPrune);
 }
 
+TEST(BroadPhaseTimer, NoTrialAfterADecisiveEstimate) {
+    // The grid is in use and SAP would be faster, but the estimate was decisive: three periods, never a SAP step.
+    BroadPhaseTimer timer;
+    for (std::uint32_t k = 0; k < 3 * (BroadPhaseTimer::kTrialPeriod + BroadPhaseTimer::kTrialSteps); ++k) {
+        const BroadPhaseKind kind =
+            timer.next(k == 0 ? std::optional(BroadPhaseKind::Grid) : std::nullopt, /*mayTry=*/false);
+        ASSERT_EQ(kind, BroadPhaseKind::Grid) << "step " << k;
+        timer.record(1.0);
+    }
+}
+
 TEST(BroadPhaseStage, AutoPicksTheGridForDenseSweepsAndSapForSparseOnes) {
     // S4-like: 100k boxes in a 200 m cube meet ~600 others per sweep: the grid.
     TaskPool one(1), two(2);
@@ -241,6 +252,7 @@ TEST(BroadPhaseStage, AutoPicksTheGridForDenseSweepsAndSapForSparseOnes) {
     EXPECT_EQ(chooseBroadPhase(dense, BroadPhaseKind::Auto, one).kind, BroadPhaseKind::Grid);
     EXPECT_EQ(chooseBroadPhase(dense, BroadPhaseKind::Auto, one).sweepCandidatesPerBody,
               chooseBroadPhase(dense, BroadPhaseKind::Auto, two).sweepCandidatesPerBody);
+    EXPECT_TRUE(chooseBroadPhase(dense, BroadPhaseKind::Auto, one).decisive) << "no SAP trial for S4";
     // A long thin row of boxes meets about one other per sweep along its length: SAP.
     Bounds row;
     row.resize(1000);
@@ -252,4 +264,18 @@ TEST(BroadPhaseStage, AutoPicksTheGridForDenseSweepsAndSapForSparseOnes) {
     EXPECT_EQ(choice.kind, BroadPhaseKind::SweepAndPrune);
     // Centres spread uniformly over 2000 m: n * width / spread = 1000 * 1 / 2000.
     EXPECT_NEAR(choice.sweepCandidatesPerBody, 0.5f, 0.01f);
+    EXPECT_TRUE(choice.decisive);
+    // S1's pyramid (about 190 a sweep), where SAP beats the grid though the estimate says grid: measured, not decided.
+    Bounds pyramid;
+    pyramid.resize(2870);
+    std::uint32_t at = 0;
+    for (int layer = 0; layer < 20; ++layer)
+        for (int i = 0; i < 20 - layer; ++i)
+            for (int j = 0; j < 20 - layer; ++j, ++at) {
+                const float x = i + 0.5f * layer, y = static_cast<float>(layer), z = j + 0.5f * layer;
+                pyramid.minX[at] = x - 0.5f, pyramid.minY[at] = y - 0.5f, pyramid.minZ[at] = z - 0.5f;
+                pyramid.maxX[at] = x + 0.5f, pyramid.maxY[at] = y + 0.5f, pyramid.maxZ[at] = z + 0.5f;
+            }
+    EXPECT_FALSE(chooseBroadPhase(pyramid, BroadPhaseKind::Auto, one).decisive)
+        << chooseBroadPhase(pyramid, BroadPhaseKind::Auto, one).sweepCandidatesPerBody;
 }
