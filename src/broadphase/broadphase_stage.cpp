@@ -162,12 +162,15 @@ void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage
         const bool countMoved =
             n > countAtEstimate_ + countAtEstimate_ / 8 || n < countAtEstimate_ - countAtEstimate_ / 8;
         std::optional<BroadPhaseKind> estimate;
-        if (!estimated_ || countMoved) {
+        // The estimate is also renewed every trial period, since a world's spread changes (a rain becomes a pile):
+        // a renewed estimate is followed only when decisive, else the clock keeps deciding.
+        if (!estimated_ || countMoved || ++stepsSinceEstimate_ >= BroadPhaseTimer::kTrialPeriod) {
             const BroadPhaseChoice choice = chooseBroadPhase(moving, timer_.inUse(), pool);
-            estimate = choice.kind;
+            if (!estimated_ || countMoved || choice.decisive) estimate = choice.kind;
             estimateDecisive_ = choice.decisive;
             estimated_ = true;
             countAtEstimate_ = n;
+            stepsSinceEstimate_ = 0;
         }
         kind = timer_.next(estimate, !estimateDecisive_);
     }

@@ -34,8 +34,8 @@ struct BroadPhaseChoice {
 BroadPhaseChoice chooseBroadPhase(const Bounds& bounds, BroadPhaseKind current, TaskPool& pool);
 
 /// `auto` by measurement. The estimate (chooseBroadPhase) picks at first and whenever the body count moves by an
-/// eighth; after that, unless the estimate was decisive, every kTrialPeriod steps the other algorithm runs for
-/// kTrialSteps steps, and it stays if its
+/// eighth, and is renewed every kTrialPeriod steps (followed then only when decisive); unless the last estimate was
+/// decisive, every kTrialPeriod steps the other algorithm runs for kTrialSteps steps, and it stays if its
 /// time (the median of the steps after its first two, which rebuild SAP's kept order) beats the running average of
 /// the one in use by a tenth. The estimate gets the common cases right, but not all of them: on the standard scenes
 /// SAP is faster on S1, S2 and S3 and the grid on S5 and S6, with estimates that do not separate them (S1 189, S3
@@ -104,6 +104,7 @@ private:
     bool estimated_ = false;
     bool estimateDecisive_ = false;
     std::uint32_t countAtEstimate_ = 0;
+    std::uint32_t stepsSinceEstimate_ = 0;
     std::vector<std::uint32_t> staticCategory_, staticMask_;  ///< by static slot
     std::vector<StaticPrimitive> addedPrimitives_;            ///< scratch of staticAdded
 };

@@ -245,6 +245,39 @@ TEST(BroadPhaseTimer, NoTrialAfterADecisiveEstimate) {
     }
 }
 
+// A world that starts as a long row (SAP, decisively) and piles up without its count changing: the estimate renewed
+// each trial period finds the pile and moves auto to the grid, though no trial runs after a decisive estimate.
+TEST(BroadPhaseStage, AutoFollowsAWorldThatPilesUpAfterADecisiveEstimate) {
+    TestWorld w;
+    const std::uint32_t box = w.addShape(BoxDef{{0.5f, 0.5f, 0.5f}});
+    constexpr std::uint32_t kCount = 2000;
+    for (std::uint32_t i = 0; i < kCount; ++i) w.addMoving(box, {2.0f * i, 0, 0}, {});
+    TaskPool pool(1);
+    BroadPhaseStage stage;
+    CandidatePairs pairs;
+    Bounds bounds;
+    bounds.resize(kCount);
+    const auto place = [&](float spacing) {
+        for (std::uint32_t i = 0; i < kCount; ++i) {
+            // A row along x, or a pile: a 4 m cube holding every box (about 500 boxes a sweep).
+            const float x = spacing > 0 ? spacing * i : 0.25f * (i % 16);
+            const float y = spacing > 0 ? 0.0f : 0.25f * ((i / 16) % 16), z = spacing > 0 ? 0.0f : 0.5f * (i / 256);
+            bounds.minX[i] = x - 0.5f, bounds.minY[i] = y - 0.5f, bounds.minZ[i] = z - 0.5f;
+            bounds.maxX[i] = x + 0.5f, bounds.maxY[i] = y + 0.5f, bounds.maxZ[i] = z + 0.5f;
+        }
+    };
+    place(2.0f);
+    ASSERT_TRUE(chooseBroadPhase(bounds, BroadPhaseKind::Auto, pool).decisive);
+    for (int step = 0; step < 10; ++step) stage.findPairs(bounds, w.storage, BroadPhaseKind::Auto, pool, pairs);
+    EXPECT_EQ(stage.lastKind(), BroadPhaseKind::SweepAndPrune);
+    place(0.0f);
+    const BroadPhaseChoice pile = chooseBroadPhase(bounds, BroadPhaseKind::SweepAndPrune, pool);
+    ASSERT_TRUE(pile.decisive && pile.kind == BroadPhaseKind::Grid) << pile.sweepCandidatesPerBody;
+    for (std::uint32_t step = 0; step <= BroadPhaseTimer::kTrialPeriod; ++step)
+        stage.findPairs(bounds, w.storage, BroadPhaseKind::Auto, pool, pairs);
+    EXPECT_EQ(stage.lastKind(), BroadPhaseKind::Grid);
+}
+
 TEST(BroadPhaseStage, AutoPicksTheGridForDenseSweepsAndSapForSparseOnes) {
     // S4-like: 100k boxes in a 200 m cube meet ~600 others per sweep: the grid.
     TaskPool one(1), two(2);
