@@ -590,11 +590,7 @@ void StaticBvh::insert(std::span<const StaticPrimitive> primitives, TaskPool& po
     ++generation_;
     pending_.insert(pending_.end(), primitives.begin(), primitives.end());
     notePending(primitives);
-    if (pending_.size() >= kBatchPrimitives) {
-        flushPending(&pool);
-        landFinishedMerges();
-        startDueMerges(true);
-    }
+    if (pending_.size() >= kBatchPrimitives) commit(pool);
 }
 
 void StaticBvh::remove(std::uint32_t body) {

@@ -12,13 +12,12 @@
 //    next step builds at most the last batch.
 //  - remove() tombstones the body's primitives in place: their boxes become empty (min = +inf, max = -inf), so
 //    queries skip them without a check of their own; node bounds stay conservative.
-//  - Parts are merged off the step, on background threads under the idle scheduling policy: parts of similar size (a
-//  tier: sizes
-//    within a factor kMergeFanIn) are merged kMergeFanIn at a time into one of the next tier, and a part with more
-//    than a quarter of its lanes tombstoned is rebuilt alone. A merge reads only the parts' immutable primitive
-//    lists; the parts stay in use until the next commit() after it finished swaps its result in (removals made
-//    meanwhile are applied to the result then). So the forest holds O(kMergeFanIn log n) parts, every primitive is
-//    rebuilt O(log n) times in the background, and a step never waits for a merge.
+//  - Parts are merged off the step, on background threads under the idle scheduling policy: parts of similar
+//    size (a tier: sizes within a factor kMergeFanIn) are merged kMergeFanIn at a time into one of the next tier,
+//    and a part with more than a quarter of its lanes tombstoned is rebuilt alone. A merge reads only the parts'
+//    immutable primitive lists; the parts stay in use until the next commit() after it finished swaps its result in
+//    (removals made meanwhile are applied to the result then). So the forest holds O(kMergeFanIn log n) parts, every
+//    primitive is rebuilt O(log n) times in the background, and a step never waits for a merge.
 // Results never depend on which part holds a primitive (every query sorts its hits), so when a merge lands, which
 // depends on the machine's timing, never changes a result; merges do not change the content, so they keep the
 // queries' kept hits valid.

@@ -299,6 +299,15 @@ TEST(StaticBvh, PosedMesh) {
     EXPECT_EQ(flatten(runQuery(bvh, moving, pool)), expected);
 }
 
+/// The forest's answer against brute force over the primitives of the bodies still alive (`live`, by body).
+void expectMatchesLiveBodies(StaticBvh& bvh, const std::vector<std::vector<StaticPrimitive>>& live,
+                             const Bounds& moving, TaskPool& pool, const char* when) {
+    std::vector<StaticPrimitive> reference;
+    for (const auto& p : live) reference.insert(reference.end(), p.begin(), p.end());
+    EXPECT_EQ(bvh.primitiveCount(), reference.size()) << when;
+    EXPECT_EQ(flatten(runQuery(bvh, moving, pool)), bruteForce(moving, reference)) << when;
+}
+
 TEST(StaticBvh, InsertAndRemoveBetweenQueriesWithoutRebuild) {
     const Shape box = buildShape(BoxDef{{0.5f, 0.5f, 0.5f}});
     const Shape smallTerrain = terrainShape(10, 5);
@@ -326,12 +335,7 @@ TEST(StaticBvh, InsertAndRemoveBetweenQueriesWithoutRebuild) {
     const StaticBvh::Tree* built = bvh.trees()[0];
     auto builtTreeKept = [&] { return std::find(bvh.trees().begin(), bvh.trees().end(), built) != bvh.trees().end(); };
     const Bounds moving = randomBoxes(2000, 32, -3, 3, 9);
-    auto check = [&](const char* when) {
-        std::vector<StaticPrimitive> reference;
-        for (const auto& p : live) reference.insert(reference.end(), p.begin(), p.end());
-        EXPECT_EQ(bvh.primitiveCount(), reference.size()) << when;
-        EXPECT_EQ(flatten(runQuery(bvh, moving, pool)), bruteForce(moving, reference)) << when;
-    };
+    auto check = [&](const char* when) { expectMatchesLiveBodies(bvh, live, moving, pool, when); };
     check("after build");
 
     // Round 1: remove a few bodies (one terrain among them), add a few new ones, reuse one removed id.
@@ -452,12 +456,7 @@ TEST(StaticBvh, ForestBuiltWhileAddingAndMergedOffTheQuery) {
     StaticBvh bvh;
     std::vector<std::vector<StaticPrimitive>> live(40000);
     const Bounds moving = randomBoxes(1500, 64, -2, 2, 3);
-    auto check = [&](const char* when) {
-        std::vector<StaticPrimitive> reference;
-        for (const auto& p : live) reference.insert(reference.end(), p.begin(), p.end());
-        EXPECT_EQ(bvh.primitiveCount(), reference.size()) << when;
-        EXPECT_EQ(flatten(runQuery(bvh, moving, pool)), bruteForce(moving, reference)) << when;
-    };
+    auto check = [&](const char* when) { expectMatchesLiveBodies(bvh, live, moving, pool, when); };
     auto add = [&](std::uint32_t body) {
         live[body].clear();
         appendStaticPrimitives(box, {{u(rng), 0.2f * u(rng), u(rng)}, {}}, body, live[body]);
