@@ -325,6 +325,11 @@ int run(const Options& options) {
             last.largeIslandConstraints, last.colors, 100.0 * last.laneOccupancy,
             std::string(rubble::positionCorrectionName(scene.settings.solver.positionCorrection)).c_str(),
             scene.settings.velocityIterations, scene.settings.positionIterations);
+        if (last.joints > 0)
+            std::printf(
+                "joints     %u joints, %.3f ms of the last step; large islands' joints: %u colours across the threads, "
+                "%u ball joints in SIMD lanes\n",
+                last.joints, last.jointMs, last.jointColours, last.batchedJoints);
     } else {
         std::printf("\nstep       median %.4f ms over %zu steps\n", stepMedian, stepMs.size());
     }

@@ -59,6 +59,9 @@ struct Profile {
     float laneOccupancy = 0;                   ///< filled SIMD lanes over lanes used by the solver, in [0, 1]
     std::uint32_t joints = 0;        ///< joints that acted in this step (unbroken; zero when joints did not run)
     std::uint32_t brokenJoints = 0;  ///< joints that broke in this step
+    /// Colours of the large islands' joints, each run across the threads (0: they ran serially, being few).
+    std::uint32_t jointColours = 0;
+    std::uint32_t batchedJoints = 0;  ///< of those joints, ball joints solved in SIMD lanes
     /// Time of the joint solver's work inside the solver stage (rows, warm start, iterations), ms; the iterations of
     /// joints in blocks of small islands run in the blocks' tasks, and their time is summed over the threads.
     double jointMs = 0;

@@ -174,7 +174,8 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
                       : blockOfSegment_[segment];
     // Jointed bodies after the contacts' own, in the joints' order.
     if (joints)
-        for (std::uint32_t dense : joints->bodies) touchRow(dense);
+        for (std::uint32_t dense : joints->bodies)
+            if (dense != kNoCoupledBody) touchRow(dense);
     const std::uint32_t bodyCount = static_cast<std::uint32_t>(bodies_.moving.size());
     bodies_.count = bodyCount;
     stats_.batches = batchCount;

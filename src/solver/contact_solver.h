@@ -73,12 +73,14 @@ struct SolverBodies {
     std::uint32_t count = 0;
 };
 
+inline constexpr std::uint32_t kNoCoupledBody = ~0u;
+
 /// What the joints add to a contact solve (src/solver/joint_solver.h): their moving bodies, which get body rows
 /// even when no manifold touches them, so that joints and contacts share the rows and the iterations; and the pairs
 /// of jointed bodies whose contacts are not solved (collideConnected false), as sorted keys of the two body slots,
 /// lower slot in the high half (jointedPairKey).
 struct JointCoupling {
-    std::vector<std::uint32_t> bodies;
+    std::vector<std::uint32_t> bodies;  ///< dense indices; kNoCoupledBody for a static side or a broken joint
     std::vector<std::uint64_t> noContactPairs;
 };
 

@@ -1,6 +1,7 @@
 #include "solver/joint_solver.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "core/parallel.h"
@@ -11,6 +12,16 @@ namespace {
 
 constexpr std::size_t kJointChunk = 1024;
 constexpr float kPi = 3.14159265358979f;
+/// The large islands' joints run serially in store order below this many (a chain of a few hundred links keeps the
+/// order that carries its load down in one pass), in colours across the threads from it on, where one colour holds
+/// thousands of joints and a wait between colours costs a few microseconds.
+constexpr std::uint32_t kColouredJoints = 1024;
+/// Work per task within one colour, a few microseconds of it: batches of ball joints, or other joints.
+constexpr std::size_t kBatchChunk = 32;
+constexpr std::size_t kColourChunk = 128;
+/// Colours beyond this go to one overflow set solved serially after the others (bodies with over 63 joints).
+constexpr std::uint32_t kMaxJointColours = 63;
+constexpr std::uint32_t kJointOverflowColour = kMaxJointColours;
 
 struct Velocity {
     Vec3 v, w;
@@ -144,11 +155,14 @@ Side sideOf(const BodyStorage& storage, const ContactSolver& contacts, BodyId id
     s.q = {m.qx[d], m.qy[d], m.qz[d], m.qw[d]};
     s.r = rotate(s.q, localAnchor - Vec3{m.lcx[d], m.lcy[d], m.lcz[d]});
     s.row = contacts.solverIndexOf(d);
-    s.dynamic = (m.flags[d] & (kFlagKinematic | kFlagFrozen)) == 0 && m.invMass[d] > 0 && s.row >= 0;
-    if (s.dynamic) {
-        s.invMass = m.invMass[d];
-        s.inertia = {m.iwXX[d], m.iwYY[d], m.iwZZ[d], m.iwXY[d], m.iwXZ[d], m.iwYZ[d]};
-    }
+    // The contact solver's masses: zero for the bodies it holds still (kinematic, frozen, asleep), no inertia
+    // without Effect::Rotation.
+    if (s.row < 0) return s;
+    const MassRow& mass = contacts.bodies().mass[static_cast<std::size_t>(s.row)];
+    s.dynamic = mass.inverseMass > 0;
+    s.invMass = mass.inverseMass;
+    const float* i = mass.inverseInertia;
+    s.inertia = {i[0], i[1], i[2], i[3], i[4], i[5]};
     return s;
 }
 
@@ -165,39 +179,63 @@ float hingeAngle(const Joint& joint, const BodyStorage& storage) {
     return hingeAngleOf(orientation(joint.bodyA), orientation(joint.bodyB), joint.referenceRotation, joint.localAxisA);
 }
 
-void JointSolver::couple(const JointStore& store, const BodyStorage& storage, JointCoupling& out) const {
-    out.bodies.clear();
-    out.noContactPairs.clear();
-    for (const Joint& j : store.joints()) {
-        if (j.broken) continue;
-        for (BodyId id : {j.bodyA, j.bodyB}) {
-            const BodySlot& slot = *storage.find(id);
-            if (slot.set == BodySet::Moving) out.bodies.push_back(slot.dense);
+void JointSolver::couple(const JointStore& store, const BodyStorage& storage, JointCoupling& out,
+                         TaskPool& pool) const {
+    // Two entries per joint, in the store's order, filled in parallel; the pairs sorted after.
+    const std::vector<Joint>& joints = store.joints();
+    out.bodies.resize(2 * joints.size());
+    out.noContactPairs.resize(joints.size());
+    constexpr std::uint64_t kNoPair = ~std::uint64_t{0};
+    pool.forChunks(joints.size(), kJointChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const Joint& j = joints[i];
+            const BodySlot& a = *storage.find(j.bodyA);
+            const BodySlot& b = *storage.find(j.bodyB);
+            out.bodies[2 * i] = !j.broken && a.set == BodySet::Moving ? a.dense : kNoCoupledBody;
+            out.bodies[2 * i + 1] = !j.broken && b.set == BodySet::Moving ? b.dense : kNoCoupledBody;
+            out.noContactPairs[i] =
+                j.broken || j.collideConnected ? kNoPair : jointedPairKey(j.bodyA.index, j.bodyB.index);
         }
-        if (!j.collideConnected) out.noContactPairs.push_back(jointedPairKey(j.bodyA.index, j.bodyB.index));
-    }
+    });
     std::sort(out.noContactPairs.begin(), out.noContactPairs.end());
     out.noContactPairs.erase(std::unique(out.noContactPairs.begin(), out.noContactPairs.end()),
                              out.noContactPairs.end());
+    if (!out.noContactPairs.empty() && out.noContactPairs.back() == kNoPair) out.noContactPairs.pop_back();
 }
 
 void JointSolver::prepare(const JointStore& store, const BodyStorage& storage, const ContactSolver& contacts,
-                          const WorldSettings& settings, float h, TaskPool& pool) {
+                          const WorldSettings& settings, float h, TaskPool& pool, const Islands* islands) {
     h_ = h;
     const SolverSettings& solver = settings.solver;
     const Softness rigid = solver.positionCorrection == PositionCorrection::SoftStep
                                ? soft(std::min(solver.jointHertz, 0.25f / h), solver.jointDampingRatio, h)
                                : Softness{solver.baumgarte / h, 1.0f, 0.0f};
+    rigid_ = {rigid.biasRate, rigid.massScale, rigid.impulseScale};
     const bool warm = solver.warmStarting;
     const std::vector<Joint>& joints = store.joints();
     rows_.resize(joints.size());
+    frames_.resize(joints.size());
+    segmentOf_.resize(joints.size());
+    // A joint's island is its dynamic body's (both bodies of a joint between dynamic bodies share one); joints of
+    // islands outside any block, and without islands every joint, go with the large islands.
+    const std::uint32_t segments = static_cast<std::uint32_t>(contacts.blocks().size()) + 1;
+    const std::vector<std::uint32_t>& moving = contacts.bodies().moving;
+    const auto segmentOf = [&](const JointRow& r) {
+        if (islands == nullptr) return segments - 1;
+        const std::int32_t row = r.dynamicA ? r.rowA : r.rowB;
+        const std::uint32_t dense = moving[static_cast<std::size_t>(row)];
+        const std::uint32_t island = dense < islands->islandOf.size() ? islands->islandOf[dense] : kNoIsland;
+        return island == kNoIsland ? segments - 1 : std::min(contacts.segmentOfIsland(island), segments - 1);
+    };
     pool.forChunks(joints.size(), kJointChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t i = begin; i < end; ++i) {
             const Joint& j = joints[i];
             JointRow& r = rows_[i];
+            JointFrame& f = frames_[i];
             r = JointRow{};
             r.joint = static_cast<std::uint32_t>(i);
             r.type = j.type;
+            segmentOf_[i] = kInactive;
             if (j.broken) continue;
             const Side A = sideOf(storage, contacts, j.bodyA, j.localAnchorA);
             const Side B = sideOf(storage, contacts, j.bodyB, j.localAnchorB);
@@ -206,8 +244,9 @@ void JointSolver::prepare(const JointStore& store, const BodyStorage& storage, c
             r.rowA = A.row, r.rowB = B.row;
             r.invMassA = A.invMass, r.invMassB = B.invMass;
             r.inertiaA = A.inertia, r.inertiaB = B.inertia;
-            r.rA = A.r, r.rB = B.r;
-            const Vec3 separation = (B.com + B.r) - (A.com + A.r);
+            r.rA = f.rA = A.r, r.rB = f.rB = B.r;
+            f.centres = B.com - A.com;
+            const Vec3 separation = f.centres + B.r - A.r;
             Softness softness = rigid;
 
             if (j.type == JointType::Distance || j.type == JointType::Spring) {
@@ -218,7 +257,7 @@ void JointSolver::prepare(const JointStore& store, const BodyStorage& storage, c
                 const float K = r.invMassA + r.invMassB + dot(ra, r.inertiaA * ra) + dot(rb, r.inertiaB * rb);
                 if (!(K > 0)) continue;
                 r.axialMass = 1.0f / K;
-                r.axialError = len - j.length;
+                f.length = j.length;
                 if (j.type == JointType::Spring) {
                     if (!(j.damping + h * j.stiffness > 0)) continue;  // neither stiffness nor damping: no force
                     softness = spring(j.stiffness, j.damping, K, h);
@@ -229,14 +268,15 @@ void JointSolver::prepare(const JointStore& store, const BodyStorage& storage, c
                 addPointMass(k, r.invMassA, r.inertiaA, r.rA);
                 addPointMass(k, r.invMassB, r.inertiaB, r.rB);
                 r.pointMass = inverse(k);
-                r.pointError = separation;
                 if (warm) r.linearImpulse = j.linearImpulse;
             }
 
             if (j.type == JointType::Hinge) {
-                const Vec3 axisA = rotate(A.q, j.localAxisA), axisB = rotate(B.q, j.localAxisB);
-                r.hingeAxis = axisA;
+                const Vec3 axisA = rotate(A.q, j.localAxisA);
+                f.axisA = r.hingeAxis = axisA;
+                f.axisB = rotate(B.q, j.localAxisB);
                 perpendiculars(axisA, r.t1, r.t2);
+                f.t1 = r.t1, f.t2 = r.t2;
                 const JointSym3 inertia = sum(r.inertiaA, r.inertiaB);
                 const float k11 = angularMass(inertia, r.t1, r.t1), k22 = angularMass(inertia, r.t2, r.t2);
                 const float k12 = angularMass(inertia, r.t1, r.t2);
@@ -244,18 +284,15 @@ void JointSolver::prepare(const JointStore& store, const BodyStorage& storage, c
                 if (det > 0) {
                     r.angularMass[0] = k22 / det, r.angularMass[1] = k11 / det, r.angularMass[2] = -k12 / det;
                 }
-                // The small rotation that would carry A's axis onto B's, along t1 and t2.
-                const Vec3 misalignment = cross(axisA, axisB);
-                r.angularError[0] = dot(misalignment, r.t1);
-                r.angularError[1] = dot(misalignment, r.t2);
                 const float kAxis = angularMass(inertia, axisA, axisA);
                 r.axisMass = kAxis > 0 ? 1.0f / kAxis : 0.0f;
                 r.limit = j.enableLimit;
                 r.motor = j.enableMotor;
                 if (r.limit) {
-                    const float angle = hingeAngleOf(A.q, B.q, j.referenceRotation, j.localAxisA);
-                    r.lowerError = angle - j.lowerAngle;
-                    r.upperError = j.upperAngle - angle;
+                    f.orientationA = A.q;
+                    f.orientationBReference = B.q * conjugate(j.referenceRotation);
+                    f.localAxisA = j.localAxisA;
+                    f.lowerAngle = j.lowerAngle, f.upperAngle = j.upperAngle;
                 }
                 r.motorSpeed = j.motorSpeed;
                 r.maxMotorImpulse = j.maxMotorTorque * h;
@@ -269,12 +306,56 @@ void JointSolver::prepare(const JointStore& store, const BodyStorage& storage, c
             }
             r.biasRate = softness.biasRate, r.massScale = softness.massScale, r.impulseScale = softness.impulseScale;
             r.active = true;
+            segmentOf_[i] = segmentOf(r);
         }
     });
+    partition(contacts, segments, pool);
 }
 
-void JointSolver::warmStartRow(const JointRow& r, SolverBodies& rows) const {
+void JointSolver::beginRow(JointRow& r, const JointFrame& f, SolverBodies& rows, bool warm) const {
     if (!r.active) return;
+    // The bodies' rotations since the step's start, as unit quaternions: the motion rows hold 2 x their vector part
+    // (ContactSolver::loadBodies), w >= 0.
+    const auto motionOf = [&](std::int32_t row, Quat& rotation) {
+        if (row < 0) return Vec3{};
+        const BodyRow& motion = rows.motion[static_cast<std::size_t>(row)];
+        const Vec3 u = motion.angular * 0.5f;
+        rotation = {u.x, u.y, u.z, std::sqrt(std::max(0.0f, 1.0f - dot(u, u)))};
+        return motion.linear;
+    };
+    Quat rotationA, rotationB;
+    const Vec3 displacementA = motionOf(r.rowA, rotationA), displacementB = motionOf(r.rowB, rotationB);
+    r.rA = rotate(rotationA, f.rA);
+    r.rB = rotate(rotationB, f.rB);
+    const Vec3 separation = f.centres + (displacementB - displacementA) + (r.rB - r.rA);
+    if (r.type == JointType::Distance || r.type == JointType::Spring) {
+        const float len = length(separation);
+        if (len > 1e-6f) r.axis = separation * (1.0f / len);  // else the last direction stands
+        r.axialError = len - f.length;
+    } else {
+        r.pointError = separation;
+    }
+    if (r.type == JointType::Hinge) {
+        r.hingeAxis = rotate(rotationA, f.axisA);
+        r.t1 = rotate(rotationA, f.t1);
+        r.t2 = rotate(rotationA, f.t2);
+        // The small rotation that would carry A's axis onto B's, along t1 and t2.
+        const Vec3 misalignment = cross(r.hingeAxis, rotate(rotationB, f.axisB));
+        r.angularError[0] = dot(misalignment, r.t1);
+        r.angularError[1] = dot(misalignment, r.t2);
+        if (r.limit) {
+            const float angle =
+                hingeAngleOf(rotationA * f.orientationA, rotationB * f.orientationBReference, Quat{}, f.localAxisA);
+            r.lowerError = angle - f.lowerAngle;
+            r.upperError = f.upperAngle - angle;
+        }
+    }
+    if (!warm) {
+        r.linearImpulse = {};
+        r.axialImpulse = r.angularImpulse1 = r.angularImpulse2 = 0;
+        r.lowerImpulse = r.upperImpulse = r.motorImpulse = 0;
+        return;
+    }
     Bodies s(r, rows);
     if (r.type == JointType::Distance || r.type == JointType::Spring)
         s.applyLinear(r.axis * r.axialImpulse);
@@ -286,14 +367,48 @@ void JointSolver::warmStartRow(const JointRow& r, SolverBodies& rows) const {
     s.store(rows);
 }
 
-void JointSolver::warmStart(SolverBodies& rows) const {
-    for (const JointRow& r : rows_) warmStartRow(r, rows);
+template <class Batch, class Row>
+void JointSolver::forEachJoint(std::uint32_t segment, SolverBodies& rows, TaskPool* pool, Batch&& batch, Row&& row) {
+    if (segment + 1 >= segmentStart_.size()) return;
+    const bool coloured = segment + 2 == segmentStart_.size() && !colours_.empty();
+    if (!coloured) {
+        for (std::uint32_t i = segmentStart_[segment]; i < segmentStart_[segment + 1]; ++i) row(segmentRows_[i]);
+        return;
+    }
+    // A colour's joints share no moving body: any thread may run any of them, in any order. The overflow colour's do
+    // share, and run in order on this thread.
+    for (const Colour& c : colours_) {
+        const auto runBatches = [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
+            const BodyRows bodyRows{rows.velocity.data(), rows.motion.data(), rows.pseudo.data(), rows.mass.data(),
+                                    static_cast<std::int32_t>(rows.count + 1 + static_cast<std::uint32_t>(worker))};
+            for (std::size_t k = begin; k < end; ++k) batch(batches_[c.firstBatch + k], bodyRows);
+        };
+        const auto runRows = [&](std::size_t, std::size_t begin, std::size_t end, int) {
+            for (std::size_t i = c.first + begin; i < c.first + end; ++i) row(segmentRows_[i]);
+        };
+        const bool parallel = pool != nullptr && !c.overflow;
+        if (c.batchCount > 0) {
+            if (parallel)
+                pool->forChunks(c.batchCount, kBatchChunk, runBatches);
+            else
+                runBatches(0, 0, c.batchCount, 0);
+        }
+        if (c.last > c.first) {
+            if (parallel)
+                pool->forChunks(c.last - c.first, kColourChunk, runRows);
+            else
+                runRows(0, 0, c.last - c.first, 0);
+        }
+    }
 }
 
-void JointSolver::warmStart(SolverBodies& rows, std::uint32_t segment) const {
-    if (segment + 1 >= segmentStart_.size()) return;
-    for (std::uint32_t i = segmentStart_[segment]; i < segmentStart_[segment + 1]; ++i)
-        warmStartRow(rows_[segmentRows_[i]], rows);
+void JointSolver::beginSubstep(SolverBodies& rows, bool warm, std::uint32_t segment, TaskPool* pool) {
+    forEachJoint(
+        segment, rows, pool,
+        [&](BallJointBatch& b, const BodyRows& bodyRows) {
+            ball_joint_kernels::begin<simd::FloatW>(b, 0, bodyRows, warm);
+        },
+        [&](std::uint32_t i) { beginRow(rows_[i], frames_[i], rows, warm); });
 }
 
 namespace {
@@ -367,58 +482,162 @@ void JointSolver::solveRow(JointRow& r, SolverBodies& rows, bool useBias, float 
     s.store(rows);
 }
 
-void JointSolver::solve(SolverBodies& rows, bool useBias) {
+void JointSolver::solve(SolverBodies& rows, bool useBias, std::uint32_t segment, TaskPool* pool) {
     const float invH = 1.0f / h_;
-    for (JointRow& r : rows_) solveRow(r, rows, useBias, invH);
+    const BallJointSoftness softness = useBias ? rigid_ : BallJointSoftness{};
+    forEachJoint(
+        segment, rows, pool,
+        [&](BallJointBatch& b, const BodyRows& bodyRows) {
+            ball_joint_kernels::solve<simd::FloatW>(b, 0, bodyRows, softness);
+        },
+        [&](std::uint32_t i) { solveRow(rows_[i], rows, useBias, invH); });
 }
 
-void JointSolver::solve(SolverBodies& rows, bool useBias, std::uint32_t segment) {
-    if (segment + 1 >= segmentStart_.size()) return;
-    const float invH = 1.0f / h_;
-    for (std::uint32_t i = segmentStart_[segment]; i < segmentStart_[segment + 1]; ++i)
-        solveRow(rows_[segmentRows_[i]], rows, useBias, invH);
-}
-
-void JointSolver::partition(const ContactSolver& contacts, const Islands& islands) {
-    // Counting sort of the active joints by segment, stable so that each segment keeps the store order. A joint's
-    // island is its dynamic body's (both bodies of a joint between dynamic bodies share one).
-    const std::uint32_t segments = static_cast<std::uint32_t>(contacts.blocks().size()) + 1;
-    const std::vector<std::uint32_t>& moving = contacts.bodies().moving;
-    const auto segmentOf = [&](const JointRow& r) {
-        const std::int32_t row = r.dynamicA ? r.rowA : r.rowB;
-        const std::uint32_t dense = moving[static_cast<std::size_t>(row)];
-        const std::uint32_t island = dense < islands.islandOf.size() ? islands.islandOf[dense] : kNoIsland;
-        return island == kNoIsland ? segments - 1 : std::min(contacts.segmentOfIsland(island), segments - 1);
-    };
+void JointSolver::partition(const ContactSolver& contacts, std::uint32_t segments, TaskPool& pool) {
+    // Counting sort of the active joints by segment, stable so that each segment keeps the store order.
     segmentStart_.assign(segments + 1, 0);
-    for (const JointRow& r : rows_)
-        if (r.active) ++segmentStart_[segmentOf(r) + 1];
+    for (const std::uint32_t segment : segmentOf_)
+        if (segment != kInactive) ++segmentStart_[segment + 1];
     for (std::uint32_t k = 0; k < segments; ++k) segmentStart_[k + 1] += segmentStart_[k];
     segmentRows_.resize(segmentStart_[segments]);
-    std::vector<std::uint32_t> fill(segmentStart_.begin(), segmentStart_.end() - 1);
-    for (std::uint32_t i = 0; i < rows_.size(); ++i)
-        if (rows_[i].active) segmentRows_[fill[segmentOf(rows_[i])]++] = i;
+    segmentFill_.assign(segmentStart_.begin(), segmentStart_.end() - 1);
+    for (std::uint32_t i = 0; i < segmentOf_.size(); ++i)
+        if (segmentOf_[i] != kInactive) segmentRows_[segmentFill_[segmentOf_[i]]++] = i;
+    colourLarge(contacts, pool);
 }
 
-void JointSolver::finish(JointStore& store) {
+void JointSolver::colourLarge(const ContactSolver& contacts, TaskPool& pool) {
+    colours_.clear();
+    batches_.clear();
+    batchedJoints_ = 0;
+    const std::size_t large = segmentStart_.size() - 2;
+    const std::uint32_t begin = segmentStart_[large], count = segmentStart_[large + 1] - begin;
+    if (count < kColouredJoints) return;
+    // Greedy, in store order: each joint takes the first colour neither of its moving bodies has yet. Within a
+    // colour the ball joints come first (they go into batches), each kind in store order.
+    bodyColours_.assign(contacts.bodies().count, 0);
+    colourOf_.resize(count);
+    constexpr std::uint32_t kColourSlots = kMaxJointColours + 1;
+    std::uint32_t balls[kColourSlots] = {}, others[kColourSlots] = {};
+    const auto batched = [](const JointRow& r, std::uint32_t colour) {
+        return r.type == JointType::Ball && colour != kJointOverflowColour;
+    };
+    for (std::uint32_t i = 0; i < count; ++i) {
+        const JointRow& r = rows_[segmentRows_[begin + i]];
+        std::uint64_t* a = r.dynamicA ? &bodyColours_[static_cast<std::size_t>(r.rowA)] : nullptr;
+        std::uint64_t* b = r.dynamicB ? &bodyColours_[static_cast<std::size_t>(r.rowB)] : nullptr;
+        const std::uint64_t used = (a ? *a : 0) | (b ? *b : 0);
+        std::uint32_t colour = static_cast<std::uint32_t>(std::countr_one(used));
+        if (colour >= kMaxJointColours) {
+            colour = kJointOverflowColour;
+        } else {
+            if (a) *a |= std::uint64_t{1} << colour;
+            if (b) *b |= std::uint64_t{1} << colour;
+        }
+        colourOf_[i] = static_cast<std::uint8_t>(colour);
+        ++(batched(r, colour) ? balls : others)[colour];
+    }
+    std::uint32_t ballFill[kColourSlots], otherFill[kColourSlots];
+    std::uint32_t at = 0, batchCount = 0;
+    for (std::uint32_t c = 0; c < kColourSlots; ++c) {
+        if (balls[c] + others[c] == 0) continue;
+        Colour colour;
+        colour.firstBatch = batchCount;
+        colour.batchCount = static_cast<std::uint32_t>((balls[c] + kBatchLanes - 1) / kBatchLanes);
+        colour.firstBall = begin + at;
+        colour.first = begin + at + balls[c];
+        colour.last = colour.first + others[c];
+        colour.overflow = c == kJointOverflowColour;
+        ballFill[c] = at;
+        otherFill[c] = at + balls[c];
+        at += balls[c] + others[c];
+        batchCount += colour.batchCount;
+        batchedJoints_ += balls[c];
+        colours_.push_back(colour);
+    }
+    colourScratch_.resize(count);
+    for (std::uint32_t i = 0; i < count; ++i) {
+        const std::uint32_t row = segmentRows_[begin + i], colour = colourOf_[i];
+        colourScratch_[batched(rows_[row], colour) ? ballFill[colour]++ : otherFill[colour]++] = row;
+    }
+    std::copy(colourScratch_.begin(), colourScratch_.end(), segmentRows_.begin() + begin);
+    batches_.resize(batchCount);
+    const auto stillRow = static_cast<std::int32_t>(contacts.bodies().count);
+    for (const Colour& colour : colours_)
+        pool.forChunks(colour.batchCount, kBatchChunk, [&](std::size_t, std::size_t from, std::size_t to, int) {
+            for (std::size_t k = from; k < to; ++k) {
+                const std::uint32_t first = colour.firstBall + static_cast<std::uint32_t>(k * kBatchLanes);
+                fillBatch(batches_[colour.firstBatch + k], first,
+                          std::min<std::uint32_t>(colour.first - first, kBatchLanes), stillRow);
+            }
+        });
+}
+
+void JointSolver::fillBatch(BallJointBatch& b, std::uint32_t first, std::uint32_t count, std::int32_t stillRow) const {
+    static const JointRow empty;
+    static const JointFrame noFrame;
+    for (std::uint32_t lane = 0; lane < kBatchLanes; ++lane) {
+        const bool used = lane < count;
+        const std::uint32_t row = used ? segmentRows_[first + lane] : 0;
+        const JointRow& r = used ? rows_[row] : empty;
+        const JointFrame& f = used ? frames_[row] : noFrame;
+        b.joint[lane] = used ? row : ~0u;
+        b.bodyA[lane] = r.rowA >= 0 ? r.rowA : stillRow;
+        b.bodyB[lane] = r.rowB >= 0 ? r.rowB : stillRow;
+        b.frameAx[lane] = f.rA.x, b.frameAy[lane] = f.rA.y, b.frameAz[lane] = f.rA.z;
+        b.frameBx[lane] = f.rB.x, b.frameBy[lane] = f.rB.y, b.frameBz[lane] = f.rB.z;
+        b.centresX[lane] = f.centres.x, b.centresY[lane] = f.centres.y, b.centresZ[lane] = f.centres.z;
+        const JointSym3& k = r.pointMass;
+        const float mass[6] = {k.xx, k.yy, k.zz, k.xy, k.xz, k.yz};
+        for (int e = 0; e < 6; ++e) b.pointMass[e][lane] = mass[e];
+        b.impulseX[lane] = r.linearImpulse.x, b.impulseY[lane] = r.linearImpulse.y,
+        b.impulseZ[lane] = r.linearImpulse.z;
+    }
+}
+
+void JointSolver::finish(JointStore& store, TaskPool& pool) {
+    pool.forChunks(batches_.size(), kBatchChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const BallJointBatch& b = batches_[k];
+            for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
+                if (b.joint[lane] != ~0u)
+                    rows_[b.joint[lane]].linearImpulse = {b.impulseX[lane], b.impulseY[lane], b.impulseZ[lane]};
+        }
+    });
     std::vector<Joint>& joints = store.joints();
     const float invH = 1.0f / h_;
-    for (JointRow& r : rows_) {
-        Joint& j = joints[r.joint];
-        if (j.broken) continue;
-        if (!r.active) {
-            j.linearImpulse = j.angularImpulse = {};
-            j.lowerImpulse = j.upperImpulse = j.motorImpulse = 0;
-            j.reactionForce = j.reactionTorque = {};
-            continue;
+    // Reactions in parallel; the joints that break are marked after, in store order.
+    breaksInChunk_.assign(TaskPool::chunkCount(rows_.size(), kJointChunk), 0);
+    pool.forChunks(rows_.size(), kJointChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const JointRow& r = rows_[i];
+            Joint& j = joints[r.joint];
+            if (j.broken) continue;
+            if (!r.active) {
+                j.linearImpulse = j.angularImpulse = {};
+                j.lowerImpulse = j.upperImpulse = j.motorImpulse = 0;
+                j.reactionForce = j.reactionTorque = {};
+                continue;
+            }
+            const bool axial = r.type == JointType::Distance || r.type == JointType::Spring;
+            j.linearImpulse = axial ? r.axis * r.axialImpulse : r.linearImpulse;
+            j.angularImpulse = r.t1 * r.angularImpulse1 + r.t2 * r.angularImpulse2;
+            j.lowerImpulse = r.lowerImpulse, j.upperImpulse = r.upperImpulse, j.motorImpulse = r.motorImpulse;
+            j.reactionForce = j.linearImpulse * invH;
+            j.reactionTorque =
+                (j.angularImpulse + r.hingeAxis * (r.motorImpulse + r.lowerImpulse - r.upperImpulse)) * invH;
+            if (length(j.reactionForce) > j.breakForce || length(j.reactionTorque) > j.breakTorque)
+                breaksInChunk_[chunk] = 1;
         }
-        const bool axial = r.type == JointType::Distance || r.type == JointType::Spring;
-        j.linearImpulse = axial ? r.axis * r.axialImpulse : r.linearImpulse;
-        j.angularImpulse = r.t1 * r.angularImpulse1 + r.t2 * r.angularImpulse2;
-        j.lowerImpulse = r.lowerImpulse, j.upperImpulse = r.upperImpulse, j.motorImpulse = r.motorImpulse;
-        j.reactionForce = j.linearImpulse * invH;
-        j.reactionTorque = (j.angularImpulse + r.hingeAxis * (r.motorImpulse + r.lowerImpulse - r.upperImpulse)) * invH;
-        if (length(j.reactionForce) > j.breakForce || length(j.reactionTorque) > j.breakTorque) {
+    });
+    for (std::size_t chunk = 0; chunk < breaksInChunk_.size(); ++chunk) {
+        if (breaksInChunk_[chunk] == 0) continue;
+        const std::size_t end = std::min(rows_.size(), (chunk + 1) * kJointChunk);
+        for (std::size_t i = chunk * kJointChunk; i < end; ++i) {
+            JointRow& r = rows_[i];
+            Joint& j = joints[r.joint];
+            if (j.broken || !r.active) continue;
+            if (!(length(j.reactionForce) > j.breakForce || length(j.reactionTorque) > j.breakTorque)) continue;
             store.markBroken(r.joint);
             j.linearImpulse = j.angularImpulse = {};
             j.lowerImpulse = j.upperImpulse = j.motorImpulse = 0;

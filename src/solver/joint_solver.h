@@ -4,23 +4,30 @@
 // both read and write the same body rows (ContactSolver::bodies()), which prepare() gives to every body a joint
 // touches.
 //
-// Joints are solved serially within their island's segment of the contact solve (ContactSolver::segmentOfIsland):
-// a block of small islands solves its joints in its own task, the large islands' joints run on the calling thread,
-// each in the joint store's dense order, so the result does not depend on the thread count. A joint costs a few
-// tens of nanoseconds per iteration (perf/joint_solver_perf.cpp measures it). Their rows are built in parallel.
+// Rows are built once per step, like the contacts' (Catto, "Solver2D", 2024): anchors, axes and effective masses at
+// the step's start. Each substep measures the joints' errors again from the bodies' motion since then (the body
+// rows' `motion`, exact rotations) and keeps the effective masses, so a substep costs the joints one light pass
+// before their iterations, not a rebuild from the body store.
+//
+// Joints run within their island's segment of the contact solve (ContactSolver::segmentOfIsland): a block of small
+// islands solves its joints serially in its own task. The large islands' joints run before their contact colours,
+// serially in the joint store's order when they are few (a chain solved from one end carries its load down in one
+// pass), else in colours of their own (greedy, in store order: no two joints of a colour share a moving body) whose
+// joints run across the threads. Either way the result does not depend on the thread count.
 //
 // Position error is fed back in the velocity rows. With Baumgarte (and with split impulses, whose pseudo-velocities
 // only serve contacts) a fraction SolverSettings::baumgarte of the error is removed per substep; with the soft step
 // the rows are soft constraints at SolverSettings::jointHertz and the relax iterations take the push-out velocity
 // away again. Springs are always soft constraints built from their stiffness k and damping c (Catto, "Soft
 // Constraints", GDC 2011): with the substep h, gamma = 1 / (h (c + h k)) and beta = h k / (c + h k), which is the
-// damped spring integrated implicitly over the substep, stable for any k. Error and impulses are measured at the
-// start of each substep from the bodies' current poses; accumulated impulses persist in the joint store and warm
-// start the next substep and step.
+// damped spring integrated implicitly over the substep, stable for any k. Accumulated impulses carry from substep to
+// substep, and through the joint store to the next step's first (warm starting); the store's reaction forces and the
+// break checks use the step's last substep.
 #include <cstdint>
 #include <vector>
 
 #include "rubble/settings.h"
+#include "solver/ball_joint_batch.h"
 #include "solver/contact_solver.h"
 #include "storage/body_storage.h"
 #include "storage/joint_storage.h"
@@ -38,7 +45,7 @@ struct JointSym3 {
     }
 };
 
-/// One joint prepared for a substep.
+/// One joint prepared for the step: its bodies and effective masses, and the current substep's anchors and errors.
 struct JointRow {
     std::uint32_t joint = 0;  ///< dense index in the store
     JointType type = JointType::Ball;
@@ -48,7 +55,7 @@ struct JointRow {
     std::int32_t rowA = -1, rowB = -1;  ///< body rows; -1 for a static body
     float invMassA = 0, invMassB = 0;
     JointSym3 inertiaA, inertiaB;  ///< world inverse inertia
-    Vec3 rA, rB;                   ///< anchors from the centres of mass, world
+    Vec3 rA, rB;                   ///< anchors from the centres of mass, world, this substep
 
     // Softness of the position rows: impulse = -massScale * mass * (J v + biasRate * C) - impulseScale * accumulated.
     float biasRate = 0, massScale = 1, impulseScale = 0;
@@ -71,6 +78,18 @@ struct JointRow {
     float lowerImpulse = 0, upperImpulse = 0, motorImpulse = 0;
 };
 
+/// What a substep measures a joint's errors from: its geometry at the step's start (world frame).
+struct JointFrame {
+    Vec3 rA, rB;                ///< anchors from the centres of mass
+    Vec3 centres;               ///< centre of mass of B - centre of mass of A
+    Vec3 axisA, axisB, t1, t2;  ///< hinge: the bodies' axes, and two directions perpendicular to A's
+    Quat orientationA;          ///< hinge limits: A's orientation, and B's times the inverse reference rotation
+    Quat orientationBReference;
+    Vec3 localAxisA;
+    float lowerAngle = 0, upperAngle = 0;
+    float length = 0;  ///< distance, spring: rest length
+};
+
 /// Current hinge angle of a joint (B relative to A about A's axis, zero at creation), rad in (-pi, pi].
 float hingeAngle(const Joint& joint, const BodyStorage& storage);
 
@@ -78,35 +97,68 @@ class JointSolver {
 public:
     /// The moving bodies of the unbroken joints (rows for the contact solver) and the jointed pairs whose contacts
     /// are not solved. Call before ContactSolver::prepare.
-    void couple(const JointStore& store, const BodyStorage& bodies, JointCoupling& out) const;
-    /// Builds this substep's rows from the bodies' current poses and the impulses kept in the store (zero without
-    /// warm starting). Call after ContactSolver::loadBodies.
+    void couple(const JointStore& store, const BodyStorage& bodies, JointCoupling& out, TaskPool& pool) const;
+    /// Builds the step's rows from the bodies' poses and the impulses kept in the store (zero without warm starting),
+    /// and lists them by the contact solver's segment of their island (with `islands`, built over the same contacts
+    /// as the contact solver's prepare(); without, every joint is in one segment). `h` is the substep. Call once per
+    /// step, after ContactSolver::prepare.
     void prepare(const JointStore& store, const BodyStorage& bodies, const ContactSolver& contacts,
-                 const WorldSettings& settings, float h, TaskPool& pool);
-    /// Lists the active joints by the contact solver's segment of their island (call after prepare(), and after
-    /// the contact solver's prepare() with the same islands).
-    void partition(const ContactSolver& contacts, const Islands& islands);
-    /// Applies the accumulated impulses to the body rows: every joint's, or one segment's (after partition()).
-    void warmStart(SolverBodies& rows) const;
-    void warmStart(SolverBodies& rows, std::uint32_t segment) const;
-    /// One iteration over every joint, or over one segment's. Without bias (the soft step's relax iterations) rigid
-    /// rows only remove relative velocity and springs are left alone: their softness is the physics, not a
-    /// correction.
-    void solve(SolverBodies& rows, bool useBias);
-    void solve(SolverBodies& rows, bool useBias, std::uint32_t segment);
-    /// Keeps the impulses for the next substep, records the reaction force and torque, and breaks the joints whose
-    /// force or torque exceeded their threshold (they are skipped from then on).
-    void finish(JointStore& store);
+                 const WorldSettings& settings, float h, TaskPool& pool, const Islands* islands = nullptr);
+    /// Starts a substep for one segment's joints: measures their errors from the body rows' motion
+    /// (call after ContactSolver::loadBodies), then applies the accumulated impulses (with `warm`) or clears them.
+    /// `pool` runs a coloured segment's colours across the threads (pass none from inside a task).
+    void beginSubstep(SolverBodies& rows, bool warm, std::uint32_t segment, TaskPool* pool = nullptr);
+    /// One iteration over one segment's joints. Without bias (the soft step's relax iterations) rigid rows only
+    /// remove relative velocity and springs are left alone: their softness is the physics, not a correction.
+    void solve(SolverBodies& rows, bool useBias, std::uint32_t segment, TaskPool* pool = nullptr);
+    /// Keeps the impulses for the next step, records the reaction force and torque, and breaks the joints whose
+    /// force or torque exceeded their threshold (they are skipped from then on). Call after the step's last
+    /// substep.
+    void finish(JointStore& store, TaskPool& pool);
 
+    /// The step's rows. A coloured segment's ball joints keep their impulses in SIMD batches during the step: their
+    /// rows' impulses are current after finish().
     const std::vector<JointRow>& rows() const { return rows_; }
+    /// Colours of the large islands' joints (0 when they run serially in store order), and how many of their joints
+    /// run in SIMD batches.
+    std::uint32_t colourCount() const { return static_cast<std::uint32_t>(colours_.size()); }
+    std::uint32_t batchedJoints() const { return batchedJoints_; }
 
 private:
-    void warmStartRow(const JointRow& r, SolverBodies& rows) const;
+    void beginRow(JointRow& r, const JointFrame& f, SolverBodies& rows, bool warm) const;
     void solveRow(JointRow& r, SolverBodies& rows, bool useBias, float invH);
+    void partition(const ContactSolver& contacts, std::uint32_t segments, TaskPool& pool);
+    void colourLarge(const ContactSolver& contacts, TaskPool& pool);
+    void fillBatch(BallJointBatch& b, std::uint32_t first, std::uint32_t count, std::int32_t stillRow) const;
+    /// Runs one segment: row(index into rows_) over its joints in store order, or colour by colour, batch(batch,
+    /// body rows) over the colour's ball-joint batches and row() over its other joints, across the pool's threads.
+    template <class Batch, class Row>
+    void forEachJoint(std::uint32_t segment, SolverBodies& rows, TaskPool* pool, Batch&& batch, Row&& row);
+
+    /// One colour of the large islands' joints: its ball joints segmentRows_[firstBall, first) in batches
+    /// [firstBatch, + batchCount), then its other joints segmentRows_[first, last) one by one (all of them,
+    /// serially, in the overflow colour).
+    struct Colour {
+        std::uint32_t firstBatch = 0, batchCount = 0;
+        std::uint32_t firstBall = 0, first = 0, last = 0;
+        bool overflow = false;
+    };
 
     std::vector<JointRow> rows_;
+    std::vector<JointFrame> frames_;  ///< by row
+    static constexpr std::uint32_t kInactive = ~0u;
+    std::vector<std::uint32_t> segmentOf_;  ///< by row: its segment, or kInactive
+    std::vector<std::uint32_t> segmentFill_;
+    std::vector<std::uint8_t> breaksInChunk_;
     std::vector<std::uint32_t> segmentStart_;  ///< segment k's joints are segmentRows_[segmentStart_[k], ...[k + 1])
-    std::vector<std::uint32_t> segmentRows_;   ///< indices into rows_, in store order within a segment
+    std::vector<std::uint32_t> segmentRows_;   ///< indices into rows_, in store order within a segment (or by colour)
+    std::vector<Colour> colours_;              ///< empty when the large islands' joints run serially
+    AlignedVector<BallJointBatch> batches_;
+    std::uint32_t batchedJoints_ = 0;
+    BallJointSoftness rigid_;                 ///< the step's softness of rigid rows
+    std::vector<std::uint64_t> bodyColours_;  ///< colouring scratch, by body row
+    std::vector<std::uint8_t> colourOf_;      ///< colouring scratch, by joint of the large segment
+    std::vector<std::uint32_t> colourScratch_;
     float h_ = 0;
 };
 

@@ -18,11 +18,26 @@ void prepareSolver(SolverParts& solver, const Contacts& contacts, const std::vec
     const auto timer = step.time(Stage::Solver);
     if (step.joints) {
         JointTimer jointTimer(step.profile);
-        solver.joints.couple(solver.jointStore, solver.bodies, solver.coupling);
+        solver.joints.couple(solver.jointStore, solver.bodies, solver.coupling, step.pool);
     }
     solver.contacts.prepare(contacts, impulses, solver.bodies, step.settings, step.effects, step.integration.dt,
                             step.pool, step.joints ? &solver.coupling : nullptr, &solver.islands);
+    if (step.joints) {
+        JointTimer jointTimer(step.profile);
+        solver.joints.prepare(solver.jointStore, solver.bodies, solver.contacts, step.settings, step.integration.dt,
+                              step.pool, &solver.islands);
+    }
 }
+
+namespace {
+
+/// The large islands' joints may run their colours across the threads: their segment's pass runs on the calling
+/// thread, a block's inside its own task.
+TaskPool* poolFor(const ContactSolver& contacts, std::uint32_t segment, TaskPool& pool) {
+    return segment == contacts.blocks().size() ? &pool : nullptr;
+}
+
+}  // namespace
 
 void solveVelocities(SolverParts& solver, StepContext& step) {
     const auto timer = step.time(Stage::Solver);
@@ -30,20 +45,15 @@ void solveVelocities(SolverParts& solver, StepContext& step) {
     JointSolver& js = solver.joints;
     const SolverSettings& settings = step.settings.solver;
     cs.loadBodies(solver.bodies.moving, step.pool);
-    if (step.joints) {
-        JointTimer jointTimer(step.profile);
-        js.prepare(solver.jointStore, solver.bodies, cs, step.settings, step.integration.dt, step.pool);
-        js.partition(cs, solver.islands);
-    }
     // Each segment of the solve (a block of small islands in its own task, or the large islands) runs its joints,
-    // then its contact colours, in every pass; with warm starting, pass 0 is the warm start.
+    // then its contact colours, in every pass; pass 0 starts the joints' substep, and with warm starting it is the
+    // warm start.
     const bool warm = settings.warmStarting;
     auto velocityJoints = [&](std::uint32_t segment, int pass) {
         timeJoints(step, [&] {
-            if (warm && pass == 0)
-                js.warmStart(cs.bodies(), segment);
-            else
-                js.solve(cs.bodies(), true, segment);
+            TaskPool* pool = poolFor(cs, segment, step.pool);
+            if (pass == 0) js.beginSubstep(cs.bodies(), warm, segment, pool);
+            if (!warm || pass > 0) js.solve(cs.bodies(), true, segment, pool);
         });
     };
     const JointPass velocityPass = velocityJoints;
@@ -64,7 +74,8 @@ void relaxAndBounce(SolverParts& solver, StepContext& step) {
     if (relax || bounce) {
         cs.loadBodies(solver.bodies.moving, step.pool);
         auto relaxJoints = [&](std::uint32_t segment, int) {
-            timeJoints(step, [&] { solver.joints.solve(cs.bodies(), false, segment); });
+            timeJoints(step,
+                       [&] { solver.joints.solve(cs.bodies(), false, segment, poolFor(cs, segment, step.pool)); });
         };
         const JointPass relaxPass = relaxJoints;
         if (relax)
@@ -73,9 +84,9 @@ void relaxAndBounce(SolverParts& solver, StepContext& step) {
         if (bounce) cs.applyRestitution(step.pool);
         cs.storeVelocities(solver.bodies.moving, step.pool);
     }
-    if (step.joints) {
+    if (step.joints && step.lastSubstep()) {
         JointTimer jointTimer(step.profile);
-        solver.joints.finish(solver.jointStore);
+        solver.joints.finish(solver.jointStore, step.pool);
     }
 }
 

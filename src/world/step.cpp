@@ -141,6 +141,10 @@ void findContacts(World::Impl& w, StepContext& step) {
     profile.solverBlocks = stats.blocks;
     profile.largeIslandConstraints = stats.largeIslandConstraints;
     profile.laneOccupancy = stats.laneOccupancy;
+    if (step.joints) {
+        profile.jointColours = w.jointSolver.colourCount();
+        profile.batchedJoints = w.jointSolver.batchedJoints();
+    }
     step.solve = !w.contactSolver.empty() || step.joints;
 }
 

@@ -410,22 +410,21 @@ TEST(ContactSolver, JointsInBlocksEndWhereTheSerialJointPassEnds) {
     blocked.loadBodies(w.bodies.moving, *w.pool);
     together.loadBodies(w.bodies.moving, *w.pool);
     detail::JointSolver blockedJoints, togetherJoints;
-    blockedJoints.prepare(w.joints, w.bodies, blocked, w.settings, h, *w.pool);
+    blockedJoints.prepare(w.joints, w.bodies, blocked, w.settings, h, *w.pool, &w.islands);
     togetherJoints.prepare(w.joints, w.bodies, together, w.settings, h, *w.pool);
-    blockedJoints.partition(blocked, w.islands);
 
     auto jointPass = [&](std::uint32_t segment, int pass) {
         if (pass == 0)
-            blockedJoints.warmStart(blocked.bodies(), segment);
+            blockedJoints.beginSubstep(blocked.bodies(), true, segment);
         else
             blockedJoints.solve(blocked.bodies(), true, segment);
     };
     const detail::JointPass pass = jointPass;
     blocked.solveVelocities(true, *w.pool, 8, /*warmStartFirst=*/true, &pass);
-    togetherJoints.warmStart(together.bodies());
+    togetherJoints.beginSubstep(together.bodies(), true, 0);  // without islands every joint is in segment 0
     together.warmStart(*w.pool);
     for (int i = 0; i < 8; ++i) {
-        togetherJoints.solve(together.bodies(), true);
+        togetherJoints.solve(together.bodies(), true, 0);
         together.solveVelocities(true, *w.pool);
     }
 

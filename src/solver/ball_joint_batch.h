@@ -1,0 +1,135 @@
+#pragma once
+// Ball joints of one colour in SIMD lanes: the large islands' joint colours (joint_solver.h) put their ball joints,
+// kBatchLanes at a time, into batches that one kernel call solves together, as the contact solver does its
+// manifolds. The lanes of a batch share no moving body, so the body rows are loaded and stored by the same
+// transposes as the contacts' (contact_batch.h), the writes aimed at bodies the solver holds still going to the
+// worker's scratch row. Empty lanes name the still row on both sides and carry zero masses: they compute a zero
+// impulse and write only the scratch row.
+//
+// The rows follow JointSolver's scalar ones: begin() measures the substep's anchors and error from the bodies' motion
+// since the step's start (exact rotations) and applies the accumulated impulse (warm starting) or clears it; solve()
+// is one sequential-impulse iteration of the three point rows with the step's softness.
+#include <cstddef>
+#include <cstdint>
+
+#include "simd/vec.h"
+#include "solver/contact_batch.h"
+
+namespace rubble::detail {
+
+struct alignas(64) BallJointBatch {
+    std::int32_t bodyA[kBatchLanes], bodyB[kBatchLanes];  ///< body rows: the still row for static sides and empty lanes
+    std::uint32_t joint[kBatchLanes];                     ///< the joint's row in JointSolver, ~0u for an empty lane
+    /// At the step's start: the anchors from the centres of mass, and centre of mass of B - centre of mass of A.
+    float frameAx[kBatchLanes], frameAy[kBatchLanes], frameAz[kBatchLanes];
+    float frameBx[kBatchLanes], frameBy[kBatchLanes], frameBz[kBatchLanes];
+    float centresX[kBatchLanes], centresY[kBatchLanes], centresZ[kBatchLanes];
+    /// Inverse of the point rows' effective mass (symmetric: xx, yy, zz, xy, xz, yz), fixed for the step.
+    float pointMass[6][kBatchLanes];
+    /// This substep's anchors and error (anchor B - anchor A).
+    float rAx[kBatchLanes], rAy[kBatchLanes], rAz[kBatchLanes];
+    float rBx[kBatchLanes], rBy[kBatchLanes], rBz[kBatchLanes];
+    float errorX[kBatchLanes], errorY[kBatchLanes], errorZ[kBatchLanes];
+    float impulseX[kBatchLanes], impulseY[kBatchLanes], impulseZ[kBatchLanes];  ///< accumulated
+};
+
+/// The step's softness of the rigid rows: impulse = -massScale * K^-1 (J v + biasRate * C) - impulseScale * total.
+struct BallJointSoftness {
+    float biasRate = 0, massScale = 1, impulseScale = 0;
+};
+
+namespace ball_joint_kernels {
+
+using contact_kernels::at3;
+using contact_kernels::IndexOf;
+using contact_kernels::loadMasses;
+using contact_kernels::loadRows;
+using contact_kernels::MassW;
+using contact_kernels::RowW;
+using contact_kernels::storeRows;
+using simd::Vec3W;
+
+template <class F>
+void put3(float* x, float* y, float* z, std::size_t lane, const Vec3W<F>& v) {
+    simd::store(x + lane, v.x);
+    simd::store(y + lane, v.y);
+    simd::store(z + lane, v.z);
+}
+
+/// The two bodies of a batch's lanes: velocities and masses in, impulses applied, velocities out.
+template <class F>
+struct Sides {
+    IndexOf<F> writeA, writeB;
+    Vec3W<F> vA, wA, vB, wB;
+    MassW<F> massA, massB;
+
+    [[gnu::always_inline]] Sides(const BallJointBatch& b, std::size_t lane, const BodyRows& rows) {
+        massA = loadMasses<F>(rows.mass, b.bodyA + lane);
+        massB = loadMasses<F>(rows.mass, b.bodyB + lane);
+        const IndexOf<F> scratch(rows.scratchRow);
+        writeA = simd::select(massA.inverseMass > F(0.0f), simd::loadInt<IndexOf<F>>(b.bodyA + lane), scratch);
+        writeB = simd::select(massB.inverseMass > F(0.0f), simd::loadInt<IndexOf<F>>(b.bodyB + lane), scratch);
+        const RowW<F> a = loadRows<F>(rows.velocity, b.bodyA + lane), c = loadRows<F>(rows.velocity, b.bodyB + lane);
+        vA = a.linear, wA = a.angular, vB = c.linear, wB = c.angular;
+    }
+    /// Impulse p on B at rB, -p on A at rA.
+    void apply(const Vec3W<F>& rA, const Vec3W<F>& rB, const Vec3W<F>& p) {
+        vA -= p * massA.inverseMass;
+        wA -= massA.inverseInertia * cross(rA, p);
+        vB += p * massB.inverseMass;
+        wB += massB.inverseInertia * cross(rB, p);
+    }
+    void store(const BodyRows& rows) const {
+        // A before B: when both are the scratch row the value written there does not matter.
+        storeRows<F>(rows.velocity, writeA, vA, wA);
+        storeRows<F>(rows.velocity, writeB, vB, wB);
+    }
+};
+
+/// A body's rotation since the step's start from its motion row (2 x the vector part of the unit quaternion, w >= 0).
+template <class F>
+simd::QuatW<F> rotationOf(const Vec3W<F>& motion) {
+    const Vec3W<F> u = motion * F(0.5f);
+    return {u.x, u.y, u.z, simd::sqrt(simd::max(F(1.0f) - dot(u, u), F(0.0f)))};
+}
+
+template <class F>
+RUBBLE_FLATTEN void begin(BallJointBatch& b, std::size_t lane, const BodyRows& rows, bool warm) {
+    const RowW<F> motionA = loadRows<F>(rows.motion, b.bodyA + lane);
+    const RowW<F> motionB = loadRows<F>(rows.motion, b.bodyB + lane);
+    const Vec3W<F> rA = rotate(rotationOf(motionA.angular), at3<F>(b.frameAx, b.frameAy, b.frameAz, lane));
+    const Vec3W<F> rB = rotate(rotationOf(motionB.angular), at3<F>(b.frameBx, b.frameBy, b.frameBz, lane));
+    const Vec3W<F> error =
+        at3<F>(b.centresX, b.centresY, b.centresZ, lane) + (motionB.linear - motionA.linear) + (rB - rA);
+    put3(b.rAx, b.rAy, b.rAz, lane, rA);
+    put3(b.rBx, b.rBy, b.rBz, lane, rB);
+    put3(b.errorX, b.errorY, b.errorZ, lane, error);
+    if (!warm) {
+        put3(b.impulseX, b.impulseY, b.impulseZ, lane, Vec3W<F>{F(0.0f), F(0.0f), F(0.0f)});
+        return;
+    }
+    Sides<F> s(b, lane, rows);
+    s.apply(rA, rB, at3<F>(b.impulseX, b.impulseY, b.impulseZ, lane));
+    s.store(rows);
+}
+
+template <class F>
+RUBBLE_FLATTEN void solve(BallJointBatch& b, std::size_t lane, const BodyRows& rows, const BallJointSoftness& soft) {
+    Sides<F> s(b, lane, rows);
+    const Vec3W<F> rA = at3<F>(b.rAx, b.rAy, b.rAz, lane), rB = at3<F>(b.rBx, b.rBy, b.rBz, lane);
+    const Vec3W<F> error = at3<F>(b.errorX, b.errorY, b.errorZ, lane);
+    const Vec3W<F> total = at3<F>(b.impulseX, b.impulseY, b.impulseZ, lane);
+    const simd::SymMat3W<F> mass{
+        contact_kernels::at<F>(b.pointMass[0], lane), contact_kernels::at<F>(b.pointMass[1], lane),
+        contact_kernels::at<F>(b.pointMass[2], lane), contact_kernels::at<F>(b.pointMass[3], lane),
+        contact_kernels::at<F>(b.pointMass[4], lane), contact_kernels::at<F>(b.pointMass[5], lane)};
+    const Vec3W<F> velocity = (s.vB + cross(s.wB, rB)) - (s.vA + cross(s.wA, rA));
+    const Vec3W<F> rhs = velocity + error * F(soft.biasRate);
+    const Vec3W<F> impulse = (mass * rhs) * F(-soft.massScale) - total * F(soft.impulseScale);
+    put3(b.impulseX, b.impulseY, b.impulseZ, lane, total + impulse);
+    s.apply(rA, rB, impulse);
+    s.store(rows);
+}
+
+}  // namespace ball_joint_kernels
+}  // namespace rubble::detail
