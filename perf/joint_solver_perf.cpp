@@ -84,6 +84,43 @@ std::unique_ptr<World> makeCloth(int threads) {
     return world;
 }
 
+/// Box3D's joint_grid (scenes/hard/hanging_sheet.json): 100 x 100 spheres of radius 0.4, 1 m apart in a vertical
+/// sheet, ball-jointed to their neighbours at the midpoints (19,701 joints), the top row static, the spheres not
+/// colliding with each other: joints only. Awake throughout, as in Box3D's harness: the sheet comes to rest.
+std::unique_ptr<World> makeSheet(int threads) {
+    constexpr int kSide = 100;
+    WorldSettings s;
+    s.threads = threads;
+    s.effects = s.effects.without(Effect::Sleeping);
+    auto world = std::make_unique<World>(s);
+    BodyDef def;
+    def.shape = world->createShape(SphereDef{0.4f});
+    def.filter = {2u, ~2u};
+    std::vector<BodyId> nodes;
+    for (int row = 0; row < kSide; ++row)
+        for (int col = 0; col < kSide; ++col) {
+            def.type = row == 0 ? BodyType::Static : BodyType::Dynamic;
+            def.position = {float(col), -float(row), 0};
+            nodes.push_back(world->createBody(def));
+        }
+    const auto node = [&](int row, int col) { return nodes[std::size_t(row * kSide + col)]; };
+    for (int row = 0; row < kSide; ++row)
+        for (int col = 0; col < kSide; ++col) {
+            BallJointDef ball;
+            if (row > 0) {
+                ball.bodyA = node(row - 1, col), ball.bodyB = node(row, col);
+                ball.localAnchorA = {0, -0.5f, 0}, ball.localAnchorB = {0, 0.5f, 0};
+                world->createJoint(ball);
+            }
+            if (col > 0 && row > 0) {
+                ball.bodyA = node(row, col - 1), ball.bodyB = node(row, col);
+                ball.localAnchorA = {0.5f, 0, 0}, ball.localAnchorB = {-0.5f, 0, 0};
+                world->createJoint(ball);
+            }
+        }
+    return world;
+}
+
 template <auto Make>
 void jointStep(benchmark::State& state) {
     const int threads = static_cast<int>(state.range(0));
@@ -108,8 +145,10 @@ void jointStep(benchmark::State& state) {
 
 void chainStep(benchmark::State& state) { jointStep<makeChain>(state); }
 void clothStep(benchmark::State& state) { jointStep<makeCloth>(state); }
+void sheetStep(benchmark::State& state) { jointStep<makeSheet>(state); }
 
 }  // namespace
 
 BENCHMARK(chainStep)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(clothStep)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(sheetStep)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();

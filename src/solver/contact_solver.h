@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "contacts/contact_cache.h"
@@ -82,6 +83,14 @@ inline constexpr std::uint32_t kNoCoupledBody = ~0u;
 struct JointCoupling {
     std::vector<std::uint32_t> bodies;  ///< dense indices; kNoCoupledBody for a static side or a broken joint
     std::vector<std::uint64_t> noContactPairs;
+    std::uint64_t pairsVersion = 0;  ///< JointStore::pairsVersion() noContactPairs were listed at
+
+    /// The joints' edges for the island builder: pairs of moving bodies, in store order (JointStore::appendEdges).
+    void appendEdges(std::vector<std::pair<std::uint32_t, std::uint32_t>>& edges) const {
+        for (std::size_t i = 0; i + 1 < bodies.size(); i += 2)
+            if (bodies[i] != kNoCoupledBody && bodies[i + 1] != kNoCoupledBody)
+                edges.emplace_back(bodies[i], bodies[i + 1]);
+    }
 };
 
 inline std::uint64_t jointedPairKey(std::uint32_t slotA, std::uint32_t slotB) {

@@ -1,6 +1,7 @@
 #include "solver/joint_solver.h"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 
@@ -19,6 +20,8 @@ constexpr std::uint32_t kColouredJoints = 1024;
 /// Work per task within one colour, a few microseconds of it: batches of ball joints, or other joints.
 constexpr std::size_t kBatchChunk = 32;
 constexpr std::size_t kColourChunk = 128;
+/// The large islands' joints split into two slabs only when at most 1 / kMaxCrossingShare of them cross the cut.
+constexpr std::uint32_t kMaxCrossingShare = 8;
 /// Colours beyond this go to one overflow set solved serially after the others (bodies with over 63 joints).
 constexpr std::uint32_t kMaxJointColours = 63;
 constexpr std::uint32_t kJointOverflowColour = kMaxJointColours;
@@ -139,11 +142,13 @@ struct Side {
     JointSym3 inertia;
 };
 
-Side sideOf(const BodyStorage& storage, const ContactSolver& contacts, BodyId id, Vec3 localAnchor) {
+/// `coupled`: the body's dense index when moving (JointCoupling::bodies), else kNoCoupledBody.
+Side sideOf(const BodyStorage& storage, const ContactSolver& contacts, BodyId id, std::uint32_t coupled,
+            Vec3 localAnchor) {
     Side s;
-    const BodySlot& slot = *storage.find(id);
-    const std::uint32_t d = slot.dense;
-    if (slot.set == BodySet::Static) {
+    const bool moving = coupled != kNoCoupledBody;
+    const std::uint32_t d = moving ? coupled : storage.find(id)->dense;
+    if (!moving) {
         const StaticBodies& b = storage.statics;
         s.com = {b.px[d], b.py[d], b.pz[d]};
         s.q = {b.qx[d], b.qy[d], b.qz[d], b.qw[d]};
@@ -166,6 +171,14 @@ Side sideOf(const BodyStorage& storage, const ContactSolver& contacts, BodyId id
     return s;
 }
 
+/// Inverse of the point rows' effective mass: how an impulse at the anchors changes their relative velocity.
+JointSym3 pointMass(const Side& A, const Side& B) {
+    JointSym3 k;
+    addPointMass(k, A.invMass, A.inertia, A.r);
+    addPointMass(k, B.invMass, B.inertia, B.r);
+    return inverse(k);
+}
+
 }  // namespace
 
 float hingeAngle(const Joint& joint, const BodyStorage& storage) {
@@ -181,10 +194,12 @@ float hingeAngle(const Joint& joint, const BodyStorage& storage) {
 
 void JointSolver::couple(const JointStore& store, const BodyStorage& storage, JointCoupling& out,
                          TaskPool& pool) const {
-    // Two entries per joint, in the store's order, filled in parallel; the pairs sorted after.
+    // Two entries per joint, in the store's order, filled in parallel. The pairs change only with the joints: listed
+    // and sorted again only then.
     const std::vector<Joint>& joints = store.joints();
+    const bool listPairs = out.pairsVersion != store.pairsVersion();
     out.bodies.resize(2 * joints.size());
-    out.noContactPairs.resize(joints.size());
+    if (listPairs) out.noContactPairs.resize(joints.size());
     constexpr std::uint64_t kNoPair = ~std::uint64_t{0};
     pool.forChunks(joints.size(), kJointChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t i = begin; i < end; ++i) {
@@ -193,123 +208,201 @@ void JointSolver::couple(const JointStore& store, const BodyStorage& storage, Jo
             const BodySlot& b = *storage.find(j.bodyB);
             out.bodies[2 * i] = !j.broken && a.set == BodySet::Moving ? a.dense : kNoCoupledBody;
             out.bodies[2 * i + 1] = !j.broken && b.set == BodySet::Moving ? b.dense : kNoCoupledBody;
-            out.noContactPairs[i] =
-                j.broken || j.collideConnected ? kNoPair : jointedPairKey(j.bodyA.index, j.bodyB.index);
+            if (listPairs)
+                out.noContactPairs[i] =
+                    j.broken || j.collideConnected ? kNoPair : jointedPairKey(j.bodyA.index, j.bodyB.index);
         }
     });
+    if (!listPairs) return;
     std::sort(out.noContactPairs.begin(), out.noContactPairs.end());
     out.noContactPairs.erase(std::unique(out.noContactPairs.begin(), out.noContactPairs.end()),
                              out.noContactPairs.end());
     if (!out.noContactPairs.empty() && out.noContactPairs.back() == kNoPair) out.noContactPairs.pop_back();
+    out.pairsVersion = store.pairsVersion();
 }
 
 void JointSolver::prepare(const JointStore& store, const BodyStorage& storage, const ContactSolver& contacts,
-                          const WorldSettings& settings, float h, TaskPool& pool, const Islands* islands) {
+                          const JointCoupling& coupling, const WorldSettings& settings, float h, TaskPool& pool,
+                          const Islands* islands) {
     h_ = h;
     const SolverSettings& solver = settings.solver;
     const Softness rigid = solver.positionCorrection == PositionCorrection::SoftStep
                                ? soft(std::min(solver.jointHertz, 0.25f / h), solver.jointDampingRatio, h)
                                : Softness{solver.baumgarte / h, 1.0f, 0.0f};
     rigid_ = {rigid.biasRate, rigid.massScale, rigid.impulseScale};
-    const bool warm = solver.warmStarting;
     const std::vector<Joint>& joints = store.joints();
     rows_.resize(joints.size());
     frames_.resize(joints.size());
-    segmentOf_.resize(joints.size());
-    // A joint's island is its dynamic body's (both bodies of a joint between dynamic bodies share one); joints of
-    // islands outside any block, and without islands every joint, go with the large islands.
+    links_.resize(joints.size());
+    // Each joint's body rows and segment first (all that partitioning and colouring read); then the rows themselves,
+    // the batched ball joints' straight into their lanes. A joint's island is its dynamic body's (both bodies of a
+    // joint between dynamic bodies share one); joints of islands outside any block, and without islands every
+    // joint, go with the large islands.
     const std::uint32_t segments = static_cast<std::uint32_t>(contacts.blocks().size()) + 1;
-    const std::vector<std::uint32_t>& moving = contacts.bodies().moving;
-    const auto segmentOf = [&](const JointRow& r) {
-        if (islands == nullptr) return segments - 1;
-        const std::int32_t row = r.dynamicA ? r.rowA : r.rowB;
-        const std::uint32_t dense = moving[static_cast<std::size_t>(row)];
-        const std::uint32_t island = dense < islands->islandOf.size() ? islands->islandOf[dense] : kNoIsland;
-        return island == kNoIsland ? segments - 1 : std::min(contacts.segmentOfIsland(island), segments - 1);
-    };
+    const SolverBodies& bodyRows = contacts.bodies();
     pool.forChunks(joints.size(), kJointChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t i = begin; i < end; ++i) {
             const Joint& j = joints[i];
-            JointRow& r = rows_[i];
-            JointFrame& f = frames_[i];
-            r = JointRow{};
-            r.joint = static_cast<std::uint32_t>(i);
-            r.type = j.type;
-            segmentOf_[i] = kInactive;
+            JointLink& l = links_[i];
+            l = JointLink{};
             if (j.broken) continue;
-            const Side A = sideOf(storage, contacts, j.bodyA, j.localAnchorA);
-            const Side B = sideOf(storage, contacts, j.bodyB, j.localAnchorB);
-            if (!A.dynamic && !B.dynamic) continue;
-            r.dynamicA = A.dynamic, r.dynamicB = B.dynamic;
-            r.rowA = A.row, r.rowB = B.row;
-            r.invMassA = A.invMass, r.invMassB = B.invMass;
-            r.inertiaA = A.inertia, r.inertiaB = B.inertia;
-            r.rA = f.rA = A.r, r.rB = f.rB = B.r;
-            f.centres = B.com - A.com;
-            const Vec3 separation = f.centres + B.r - A.r;
-            Softness softness = rigid;
-
-            if (j.type == JointType::Distance || j.type == JointType::Spring) {
-                const float len = length(separation);
-                if (!(len > 1e-6f)) continue;  // coincident anchors: no line to act along (only a spring's rest)
-                r.axis = separation * (1.0f / len);
-                const Vec3 ra = cross(r.rA, r.axis), rb = cross(r.rB, r.axis);
-                const float K = r.invMassA + r.invMassB + dot(ra, r.inertiaA * ra) + dot(rb, r.inertiaB * rb);
-                if (!(K > 0)) continue;
-                r.axialMass = 1.0f / K;
-                f.length = j.length;
-                if (j.type == JointType::Spring) {
-                    if (!(j.damping + h * j.stiffness > 0)) continue;  // neither stiffness nor damping: no force
-                    softness = spring(j.stiffness, j.damping, K, h);
-                }
-                if (warm) r.axialImpulse = dot(j.linearImpulse, r.axis);
-            } else {
-                JointSym3 k;
-                addPointMass(k, r.invMassA, r.inertiaA, r.rA);
-                addPointMass(k, r.invMassB, r.inertiaB, r.rB);
-                r.pointMass = inverse(k);
-                if (warm) r.linearImpulse = j.linearImpulse;
-            }
-
-            if (j.type == JointType::Hinge) {
-                const Vec3 axisA = rotate(A.q, j.localAxisA);
-                f.axisA = r.hingeAxis = axisA;
-                f.axisB = rotate(B.q, j.localAxisB);
-                perpendiculars(axisA, r.t1, r.t2);
-                f.t1 = r.t1, f.t2 = r.t2;
-                const JointSym3 inertia = sum(r.inertiaA, r.inertiaB);
-                const float k11 = angularMass(inertia, r.t1, r.t1), k22 = angularMass(inertia, r.t2, r.t2);
-                const float k12 = angularMass(inertia, r.t1, r.t2);
-                const float det = k11 * k22 - k12 * k12;
-                if (det > 0) {
-                    r.angularMass[0] = k22 / det, r.angularMass[1] = k11 / det, r.angularMass[2] = -k12 / det;
-                }
-                const float kAxis = angularMass(inertia, axisA, axisA);
-                r.axisMass = kAxis > 0 ? 1.0f / kAxis : 0.0f;
-                r.limit = j.enableLimit;
-                r.motor = j.enableMotor;
-                if (r.limit) {
-                    f.orientationA = A.q;
-                    f.orientationBReference = B.q * conjugate(j.referenceRotation);
-                    f.localAxisA = j.localAxisA;
-                    f.lowerAngle = j.lowerAngle, f.upperAngle = j.upperAngle;
-                }
-                r.motorSpeed = j.motorSpeed;
-                r.maxMotorImpulse = j.maxMotorTorque * h;
-                if (warm) {
-                    r.angularImpulse1 = dot(j.angularImpulse, r.t1);
-                    r.angularImpulse2 = dot(j.angularImpulse, r.t2);
-                    r.lowerImpulse = r.limit ? j.lowerImpulse : 0.0f;
-                    r.upperImpulse = r.limit ? j.upperImpulse : 0.0f;
-                    r.motorImpulse = r.motor ? j.motorImpulse : 0.0f;
-                }
-            }
-            r.biasRate = softness.biasRate, r.massScale = softness.massScale, r.impulseScale = softness.impulseScale;
-            r.active = true;
-            segmentOf_[i] = segmentOf(r);
+            const auto rowOf = [&](std::uint32_t dense, bool& dynamic) {
+                const std::int32_t row = dense == kNoCoupledBody ? -1 : contacts.solverIndexOf(dense);
+                dynamic = row >= 0 && bodyRows.mass[static_cast<std::size_t>(row)].inverseMass > 0;
+                return row;
+            };
+            l.rowA = rowOf(coupling.bodies[2 * i], l.dynamicA);
+            l.rowB = rowOf(coupling.bodies[2 * i + 1], l.dynamicB);
+            if (!l.dynamicA && !l.dynamicB) continue;
+            l.ball = j.type == JointType::Ball;
+            l.segment = segments - 1;
+            if (islands == nullptr) continue;
+            const std::uint32_t dense = bodyRows.moving[static_cast<std::size_t>(l.dynamicA ? l.rowA : l.rowB)];
+            const std::uint32_t island = dense < islands->islandOf.size() ? islands->islandOf[dense] : kNoIsland;
+            if (island != kNoIsland) l.segment = std::min(contacts.segmentOfIsland(island), segments - 1);
         }
     });
-    partition(contacts, segments, pool);
+    // The segments and colours follow from the links alone: a joint graph that did not change (the usual step) keeps
+    // last step's.
+    const auto sameLinks = [&] {
+        if (segments != linkedSegments_ || links_.size() != lastLinks_.size()) return false;
+        for (std::size_t i = 0; i < links_.size(); ++i) {
+            const JointLink &a = links_[i], &b = lastLinks_[i];
+            if (a.rowA != b.rowA || a.rowB != b.rowB || a.segment != b.segment || a.dynamicA != b.dynamicA ||
+                a.dynamicB != b.dynamicB || a.ball != b.ball)
+                return false;
+        }
+        return true;
+    };
+    if (sameLinks()) {
+        links_ = lastLinks_;  // with their batched flags
+    } else {
+        partition(contacts, segments);
+        lastLinks_ = links_;
+        linkedSegments_ = segments;
+    }
+    const BuildInputs in{store, storage, contacts, coupling, rigid_, h, solver.warmStarting};
+    pool.forChunks(joints.size(), kJointChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t i = begin; i < end; ++i)
+            if (!links_[i].batched) buildRow(static_cast<std::uint32_t>(i), in);
+    });
+    const auto stillRow = static_cast<std::int32_t>(bodyRows.count);
+    for (const Colour& colour : colours_)
+        pool.forChunks(colour.batchCount, kBatchChunk, [&](std::size_t, std::size_t from, std::size_t to, int) {
+            for (std::size_t k = from; k < to; ++k) {
+                const std::uint32_t first = colour.firstBall + static_cast<std::uint32_t>(k * kBatchLanes);
+                buildBatch(batches_[colour.firstBatch + k], first,
+                           std::min<std::uint32_t>(colour.first - first, kBatchLanes), stillRow, in);
+            }
+        });
+}
+
+void JointSolver::buildRow(std::uint32_t i, const BuildInputs& in) {
+    const Joint& j = in.store.joints()[i];
+    JointRow& r = rows_[i];
+    JointFrame& f = frames_[i];
+    r = JointRow{};
+    r.joint = i;
+    r.type = j.type;
+    if (j.broken) return;
+    const Side A = sideOf(in.storage, in.contacts, j.bodyA, in.coupling.bodies[2 * i], j.localAnchorA);
+    const Side B = sideOf(in.storage, in.contacts, j.bodyB, in.coupling.bodies[2 * i + 1], j.localAnchorB);
+    if (!A.dynamic && !B.dynamic) return;
+    const float h = in.h;
+    const bool warm = in.warm;
+    r.dynamicA = A.dynamic, r.dynamicB = B.dynamic;
+    r.rowA = A.row, r.rowB = B.row;
+    r.invMassA = A.invMass, r.invMassB = B.invMass;
+    r.inertiaA = A.inertia, r.inertiaB = B.inertia;
+    r.rA = f.rA = A.r, r.rB = f.rB = B.r;
+    f.centres = B.com - A.com;
+    const Vec3 separation = f.centres + B.r - A.r;
+    Softness softness{in.rigid.biasRate, in.rigid.massScale, in.rigid.impulseScale};
+
+    if (j.type == JointType::Distance || j.type == JointType::Spring) {
+        const float len = length(separation);
+        if (!(len > 1e-6f)) return;  // coincident anchors: no line to act along (only a spring's rest)
+        r.axis = separation * (1.0f / len);
+        const Vec3 ra = cross(r.rA, r.axis), rb = cross(r.rB, r.axis);
+        const float K = r.invMassA + r.invMassB + dot(ra, r.inertiaA * ra) + dot(rb, r.inertiaB * rb);
+        if (!(K > 0)) return;
+        r.axialMass = 1.0f / K;
+        f.length = j.length;
+        if (j.type == JointType::Spring) {
+            if (!(j.damping + h * j.stiffness > 0)) return;  // neither stiffness nor damping: no force
+            softness = spring(j.stiffness, j.damping, K, h);
+        }
+        if (warm) r.axialImpulse = dot(j.linearImpulse, r.axis);
+    } else {
+        r.pointMass = pointMass(A, B);
+        if (warm) r.linearImpulse = j.linearImpulse;
+    }
+
+    if (j.type == JointType::Hinge) {
+        const Vec3 axisA = rotate(A.q, j.localAxisA);
+        f.axisA = r.hingeAxis = axisA;
+        f.axisB = rotate(B.q, j.localAxisB);
+        perpendiculars(axisA, r.t1, r.t2);
+        f.t1 = r.t1, f.t2 = r.t2;
+        const JointSym3 inertia = sum(r.inertiaA, r.inertiaB);
+        const float k11 = angularMass(inertia, r.t1, r.t1), k22 = angularMass(inertia, r.t2, r.t2);
+        const float k12 = angularMass(inertia, r.t1, r.t2);
+        const float det = k11 * k22 - k12 * k12;
+        if (det > 0) {
+            r.angularMass[0] = k22 / det, r.angularMass[1] = k11 / det, r.angularMass[2] = -k12 / det;
+        }
+        const float kAxis = angularMass(inertia, axisA, axisA);
+        r.axisMass = kAxis > 0 ? 1.0f / kAxis : 0.0f;
+        r.limit = j.enableLimit;
+        r.motor = j.enableMotor;
+        if (r.limit) {
+            f.orientationA = A.q;
+            f.orientationBReference = B.q * conjugate(j.referenceRotation);
+            f.localAxisA = j.localAxisA;
+            f.lowerAngle = j.lowerAngle, f.upperAngle = j.upperAngle;
+        }
+        r.motorSpeed = j.motorSpeed;
+        r.maxMotorImpulse = j.maxMotorTorque * h;
+        if (warm) {
+            r.angularImpulse1 = dot(j.angularImpulse, r.t1);
+            r.angularImpulse2 = dot(j.angularImpulse, r.t2);
+            r.lowerImpulse = r.limit ? j.lowerImpulse : 0.0f;
+            r.upperImpulse = r.limit ? j.upperImpulse : 0.0f;
+            r.motorImpulse = r.motor ? j.motorImpulse : 0.0f;
+        }
+    }
+    r.biasRate = softness.biasRate, r.massScale = softness.massScale, r.impulseScale = softness.impulseScale;
+    r.active = true;
+}
+
+void JointSolver::buildBatch(BallJointBatch& b, std::uint32_t first, std::uint32_t count, std::int32_t stillRow,
+                             const BuildInputs& in) const {
+    const std::vector<Joint>& joints = in.store.joints();
+    for (std::uint32_t lane = 0; lane < kBatchLanes; ++lane) {
+        // An empty lane: the still row on both sides, no geometry, no mass, no impulse.
+        Side A, B;
+        Vec3 impulse;
+        JointSym3 mass;
+        b.joint[lane] = ~0u;
+        if (lane < count) {
+            const std::uint32_t i = segmentRows_[first + lane];
+            const Joint& j = joints[i];
+            A = sideOf(in.storage, in.contacts, j.bodyA, in.coupling.bodies[2 * i], j.localAnchorA);
+            B = sideOf(in.storage, in.contacts, j.bodyB, in.coupling.bodies[2 * i + 1], j.localAnchorB);
+            mass = pointMass(A, B);
+            if (in.warm) impulse = j.linearImpulse;
+            b.joint[lane] = i;
+        }
+        b.bodyA[lane] = A.row >= 0 ? A.row : stillRow;
+        b.bodyB[lane] = B.row >= 0 ? B.row : stillRow;
+        const Vec3 centres = B.com - A.com;
+        b.frameAx[lane] = A.r.x, b.frameAy[lane] = A.r.y, b.frameAz[lane] = A.r.z;
+        b.frameBx[lane] = B.r.x, b.frameBy[lane] = B.r.y, b.frameBz[lane] = B.r.z;
+        b.centresX[lane] = centres.x, b.centresY[lane] = centres.y, b.centresZ[lane] = centres.z;
+        const float entries[6] = {mass.xx, mass.yy, mass.zz, mass.xy, mass.xz, mass.yz};
+        for (int e = 0; e < 6; ++e) b.pointMass[e][lane] = entries[e];
+        b.impulseX[lane] = impulse.x, b.impulseY[lane] = impulse.y, b.impulseZ[lane] = impulse.z;
+    }
 }
 
 void JointSolver::beginRow(JointRow& r, const JointFrame& f, SolverBodies& rows, bool warm) const {
@@ -375,31 +468,56 @@ void JointSolver::forEachJoint(std::uint32_t segment, SolverBodies& rows, TaskPo
         for (std::uint32_t i = segmentStart_[segment]; i < segmentStart_[segment + 1]; ++i) row(segmentRows_[i]);
         return;
     }
+    const auto bodyRowsFor = [&](int worker) {
+        return BodyRows{rows.velocity.data(), rows.motion.data(), rows.pseudo.data(), rows.mass.data(),
+                        static_cast<std::int32_t>(rows.count + 1 + static_cast<std::uint32_t>(worker))};
+    };
     // A colour's joints share no moving body: any thread may run any of them, in any order. The overflow colour's do
-    // share, and run in order on this thread.
-    for (const Colour& c : colours_) {
+    // share, and run in order on one thread.
+    const auto runColour = [&](const Colour& c, TaskPool* across) {
         const auto runBatches = [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
-            const BodyRows bodyRows{rows.velocity.data(), rows.motion.data(), rows.pseudo.data(), rows.mass.data(),
-                                    static_cast<std::int32_t>(rows.count + 1 + static_cast<std::uint32_t>(worker))};
+            const BodyRows bodyRows = bodyRowsFor(worker);
             for (std::size_t k = begin; k < end; ++k) batch(batches_[c.firstBatch + k], bodyRows);
         };
         const auto runRows = [&](std::size_t, std::size_t begin, std::size_t end, int) {
             for (std::size_t i = c.first + begin; i < c.first + end; ++i) row(segmentRows_[i]);
         };
-        const bool parallel = pool != nullptr && !c.overflow;
+        const bool parallel = across != nullptr && !c.overflow;
         if (c.batchCount > 0) {
             if (parallel)
-                pool->forChunks(c.batchCount, kBatchChunk, runBatches);
+                across->forChunks(c.batchCount, kBatchChunk, runBatches);
             else
                 runBatches(0, 0, c.batchCount, 0);
         }
         if (c.last > c.first) {
             if (parallel)
-                pool->forChunks(c.last - c.first, kColourChunk, runRows);
+                across->forChunks(c.last - c.first, kColourChunk, runRows);
             else
                 runRows(0, 0, c.last - c.first, 0);
         }
+    };
+    const auto runGroup = [&](const Group& g, TaskPool* across) {
+        for (std::uint32_t c = g.firstColour; c < g.firstColour + g.colourCount; ++c) runColour(colours_[c], across);
+    };
+    if (groups_.size() == 1) {
+        runGroup(groups_[0], pool);
+        return;
     }
+    // Two slabs, one task each (they share no moving body), then the joints that cross them.
+    const auto runSlab = [&](std::size_t slab, std::size_t, std::size_t, int worker) {
+        const BodyRows bodyRows = bodyRowsFor(worker);
+        const Group& g = groups_[slab];
+        for (std::uint32_t c = g.firstColour; c < g.firstColour + g.colourCount; ++c) {
+            const Colour& colour = colours_[c];
+            for (std::uint32_t k = 0; k < colour.batchCount; ++k) batch(batches_[colour.firstBatch + k], bodyRows);
+            for (std::uint32_t i = colour.first; i < colour.last; ++i) row(segmentRows_[i]);
+        }
+    };
+    if (pool != nullptr)
+        pool->forChunks(2, 1, runSlab);
+    else
+        for (std::size_t slab = 0; slab < 2; ++slab) runSlab(slab, 0, 0, 0);
+    runGroup(groups_[2], pool);
 }
 
 void JointSolver::beginSubstep(SolverBodies& rows, bool warm, std::uint32_t segment, TaskPool* pool) {
@@ -493,39 +611,82 @@ void JointSolver::solve(SolverBodies& rows, bool useBias, std::uint32_t segment,
         [&](std::uint32_t i) { solveRow(rows_[i], rows, useBias, invH); });
 }
 
-void JointSolver::partition(const ContactSolver& contacts, std::uint32_t segments, TaskPool& pool) {
+void JointSolver::partition(const ContactSolver& contacts, std::uint32_t segments) {
     // Counting sort of the active joints by segment, stable so that each segment keeps the store order.
     segmentStart_.assign(segments + 1, 0);
-    for (const std::uint32_t segment : segmentOf_)
-        if (segment != kInactive) ++segmentStart_[segment + 1];
+    for (const JointLink& l : links_)
+        if (l.segment != kInactive) ++segmentStart_[l.segment + 1];
     for (std::uint32_t k = 0; k < segments; ++k) segmentStart_[k + 1] += segmentStart_[k];
     segmentRows_.resize(segmentStart_[segments]);
     segmentFill_.assign(segmentStart_.begin(), segmentStart_.end() - 1);
-    for (std::uint32_t i = 0; i < segmentOf_.size(); ++i)
-        if (segmentOf_[i] != kInactive) segmentRows_[segmentFill_[segmentOf_[i]]++] = i;
-    colourLarge(contacts, pool);
+    for (std::uint32_t i = 0; i < links_.size(); ++i)
+        if (links_[i].segment != kInactive) segmentRows_[segmentFill_[links_[i].segment]++] = i;
+    colourLarge(contacts);
 }
 
-void JointSolver::colourLarge(const ContactSolver& contacts, TaskPool& pool) {
+void JointSolver::colourLarge(const ContactSolver& contacts) {
     colours_.clear();
+    groups_.clear();
     batches_.clear();
     batchedJoints_ = 0;
     const std::size_t large = segmentStart_.size() - 2;
     const std::uint32_t begin = segmentStart_[large], count = segmentStart_[large + 1] - begin;
     if (count < kColouredJoints) return;
+    // Two slabs when the joints split cleanly by body row (the islands number a body's rows island by island in
+    // body order, so a sheet or a lattice built in order splits across its middle): each slab's colours then run
+    // whole in one task per pass, and only the joints that cross the cut colour by colour after them. A pass costs
+    // one wait for the threads instead of one per colour. The cut: the median of the joints' lowest dynamic rows.
+    const auto lowRow = [&](const JointLink& l) {
+        return l.dynamicA && (!l.dynamicB || l.rowA < l.rowB) ? l.rowA : l.rowB;
+    };
+    slabKeys_.resize(count);
+    for (std::uint32_t i = 0; i < count; ++i) slabKeys_[i] = lowRow(links_[segmentRows_[begin + i]]);
+    const auto middle = slabKeys_.begin() + count / 2;
+    std::nth_element(slabKeys_.begin(), middle, slabKeys_.end());
+    const std::int32_t cut = *middle;
+    std::uint32_t sizes[3] = {};
+    const auto groupOf = [&](const JointLink& l) {
+        const bool belowA = !l.dynamicA || l.rowA < cut, belowB = !l.dynamicB || l.rowB < cut;
+        const bool aboveA = !l.dynamicA || l.rowA >= cut, aboveB = !l.dynamicB || l.rowB >= cut;
+        return belowA && belowB ? 0u : (aboveA && aboveB ? 1u : 2u);
+    };
+    for (std::uint32_t i = 0; i < count; ++i) ++sizes[groupOf(links_[segmentRows_[begin + i]])];
+    const bool slabs = sizes[2] <= count / kMaxCrossingShare && std::min(sizes[0], sizes[1]) >= count / 4;
+    // Each group in store order, one after the other: slab 0, slab 1, the crossing joints; or all as one.
+    colourScratch_.resize(count);
+    std::uint32_t fill[3] = {0, sizes[0], sizes[0] + sizes[1]};
+    for (std::uint32_t i = 0; i < count; ++i) {
+        const std::uint32_t row = segmentRows_[begin + i];
+        colourScratch_[slabs ? fill[groupOf(links_[row])]++ : i] = row;
+    }
+    std::copy(colourScratch_.begin(), colourScratch_.end(), segmentRows_.begin() + begin);
+    std::uint32_t batchCount = 0;
+    if (slabs) {
+        colourGroup(contacts, begin, sizes[0], batchCount);
+        colourGroup(contacts, begin + sizes[0], sizes[1], batchCount);
+        colourGroup(contacts, begin + sizes[0] + sizes[1], sizes[2], batchCount);
+    } else {
+        colourGroup(contacts, begin, count, batchCount);
+    }
+    batches_.resize(batchCount);
+}
+
+void JointSolver::colourGroup(const ContactSolver& contacts, std::uint32_t begin, std::uint32_t count,
+                              std::uint32_t& batchCount) {
     // Greedy, in store order: each joint takes the first colour neither of its moving bodies has yet. Within a
     // colour the ball joints come first (they go into batches), each kind in store order.
+    groups_.push_back({static_cast<std::uint32_t>(colours_.size()), 0});
     bodyColours_.assign(contacts.bodies().count, 0);
     colourOf_.resize(count);
     constexpr std::uint32_t kColourSlots = kMaxJointColours + 1;
     std::uint32_t balls[kColourSlots] = {}, others[kColourSlots] = {};
-    const auto batched = [](const JointRow& r, std::uint32_t colour) {
-        return r.type == JointType::Ball && colour != kJointOverflowColour;
+    const auto batched = [](const JointLink& l, std::uint32_t colour) {
+        return l.ball && colour != kJointOverflowColour;
     };
     for (std::uint32_t i = 0; i < count; ++i) {
-        const JointRow& r = rows_[segmentRows_[begin + i]];
-        std::uint64_t* a = r.dynamicA ? &bodyColours_[static_cast<std::size_t>(r.rowA)] : nullptr;
-        std::uint64_t* b = r.dynamicB ? &bodyColours_[static_cast<std::size_t>(r.rowB)] : nullptr;
+        const JointLink& l = links_[segmentRows_[begin + i]];
+        std::uint64_t* a = l.dynamicA ? &bodyColours_[static_cast<std::size_t>(l.rowA)] : nullptr;
+        std::uint64_t* b = l.dynamicB ? &bodyColours_[static_cast<std::size_t>(l.rowB)] : nullptr;
         const std::uint64_t used = (a ? *a : 0) | (b ? *b : 0);
         std::uint32_t colour = static_cast<std::uint32_t>(std::countr_one(used));
         if (colour >= kMaxJointColours) {
@@ -535,10 +696,10 @@ void JointSolver::colourLarge(const ContactSolver& contacts, TaskPool& pool) {
             if (b) *b |= std::uint64_t{1} << colour;
         }
         colourOf_[i] = static_cast<std::uint8_t>(colour);
-        ++(batched(r, colour) ? balls : others)[colour];
+        ++(batched(l, colour) ? balls : others)[colour];
     }
     std::uint32_t ballFill[kColourSlots], otherFill[kColourSlots];
-    std::uint32_t at = 0, batchCount = 0;
+    std::uint32_t at = 0;
     for (std::uint32_t c = 0; c < kColourSlots; ++c) {
         if (balls[c] + others[c] == 0) continue;
         Colour colour;
@@ -555,63 +716,39 @@ void JointSolver::colourLarge(const ContactSolver& contacts, TaskPool& pool) {
         batchedJoints_ += balls[c];
         colours_.push_back(colour);
     }
-    colourScratch_.resize(count);
+    groupScratch_.resize(count);
     for (std::uint32_t i = 0; i < count; ++i) {
         const std::uint32_t row = segmentRows_[begin + i], colour = colourOf_[i];
-        colourScratch_[batched(rows_[row], colour) ? ballFill[colour]++ : otherFill[colour]++] = row;
+        JointLink& l = links_[row];
+        l.batched = batched(l, colour);
+        groupScratch_[l.batched ? ballFill[colour]++ : otherFill[colour]++] = row;
     }
-    std::copy(colourScratch_.begin(), colourScratch_.end(), segmentRows_.begin() + begin);
-    batches_.resize(batchCount);
-    const auto stillRow = static_cast<std::int32_t>(contacts.bodies().count);
-    for (const Colour& colour : colours_)
-        pool.forChunks(colour.batchCount, kBatchChunk, [&](std::size_t, std::size_t from, std::size_t to, int) {
-            for (std::size_t k = from; k < to; ++k) {
-                const std::uint32_t first = colour.firstBall + static_cast<std::uint32_t>(k * kBatchLanes);
-                fillBatch(batches_[colour.firstBatch + k], first,
-                          std::min<std::uint32_t>(colour.first - first, kBatchLanes), stillRow);
-            }
-        });
-}
-
-void JointSolver::fillBatch(BallJointBatch& b, std::uint32_t first, std::uint32_t count, std::int32_t stillRow) const {
-    static const JointRow empty;
-    static const JointFrame noFrame;
-    for (std::uint32_t lane = 0; lane < kBatchLanes; ++lane) {
-        const bool used = lane < count;
-        const std::uint32_t row = used ? segmentRows_[first + lane] : 0;
-        const JointRow& r = used ? rows_[row] : empty;
-        const JointFrame& f = used ? frames_[row] : noFrame;
-        b.joint[lane] = used ? row : ~0u;
-        b.bodyA[lane] = r.rowA >= 0 ? r.rowA : stillRow;
-        b.bodyB[lane] = r.rowB >= 0 ? r.rowB : stillRow;
-        b.frameAx[lane] = f.rA.x, b.frameAy[lane] = f.rA.y, b.frameAz[lane] = f.rA.z;
-        b.frameBx[lane] = f.rB.x, b.frameBy[lane] = f.rB.y, b.frameBz[lane] = f.rB.z;
-        b.centresX[lane] = f.centres.x, b.centresY[lane] = f.centres.y, b.centresZ[lane] = f.centres.z;
-        const JointSym3& k = r.pointMass;
-        const float mass[6] = {k.xx, k.yy, k.zz, k.xy, k.xz, k.yz};
-        for (int e = 0; e < 6; ++e) b.pointMass[e][lane] = mass[e];
-        b.impulseX[lane] = r.linearImpulse.x, b.impulseY[lane] = r.linearImpulse.y,
-        b.impulseZ[lane] = r.linearImpulse.z;
-    }
+    std::copy(groupScratch_.begin(), groupScratch_.end(), segmentRows_.begin() + begin);
+    groups_.back().colourCount = static_cast<std::uint32_t>(colours_.size()) - groups_.back().firstColour;
 }
 
 void JointSolver::finish(JointStore& store, TaskPool& pool) {
-    pool.forChunks(batches_.size(), kBatchChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-        for (std::size_t k = begin; k < end; ++k) {
-            const BallJointBatch& b = batches_[k];
-            for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
-                if (b.joint[lane] != ~0u)
-                    rows_[b.joint[lane]].linearImpulse = {b.impulseX[lane], b.impulseY[lane], b.impulseZ[lane]};
-        }
-    });
     std::vector<Joint>& joints = store.joints();
     const float invH = 1.0f / h_;
     // Reactions in parallel; the joints that break are marked after, in store order.
-    breaksInChunk_.assign(TaskPool::chunkCount(rows_.size(), kJointChunk), 0);
-    pool.forChunks(rows_.size(), kJointChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
+    breaking_.assign(joints.size(), 0);
+    std::atomic<bool> anyBreaks{false};
+    const auto react = [&](std::uint32_t i, Vec3 linear, Vec3 angular, Vec3 axial) {
+        Joint& j = joints[i];
+        j.linearImpulse = linear;
+        j.angularImpulse = angular;
+        j.reactionForce = linear * invH;
+        j.reactionTorque = (angular + axial) * invH;
+        if (length(j.reactionForce) > j.breakForce || length(j.reactionTorque) > j.breakTorque) {
+            breaking_[i] = 1;
+            anyBreaks.store(true, std::memory_order_relaxed);
+        }
+    };
+    pool.forChunks(rows_.size(), kJointChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t i = begin; i < end; ++i) {
+            if (links_[i].batched) continue;
             const JointRow& r = rows_[i];
-            Joint& j = joints[r.joint];
+            Joint& j = joints[i];
             if (j.broken) continue;
             if (!r.active) {
                 j.linearImpulse = j.angularImpulse = {};
@@ -620,29 +757,28 @@ void JointSolver::finish(JointStore& store, TaskPool& pool) {
                 continue;
             }
             const bool axial = r.type == JointType::Distance || r.type == JointType::Spring;
-            j.linearImpulse = axial ? r.axis * r.axialImpulse : r.linearImpulse;
-            j.angularImpulse = r.t1 * r.angularImpulse1 + r.t2 * r.angularImpulse2;
             j.lowerImpulse = r.lowerImpulse, j.upperImpulse = r.upperImpulse, j.motorImpulse = r.motorImpulse;
-            j.reactionForce = j.linearImpulse * invH;
-            j.reactionTorque =
-                (j.angularImpulse + r.hingeAxis * (r.motorImpulse + r.lowerImpulse - r.upperImpulse)) * invH;
-            if (length(j.reactionForce) > j.breakForce || length(j.reactionTorque) > j.breakTorque)
-                breaksInChunk_[chunk] = 1;
+            react(static_cast<std::uint32_t>(i), axial ? r.axis * r.axialImpulse : r.linearImpulse,
+                  r.t1 * r.angularImpulse1 + r.t2 * r.angularImpulse2,
+                  r.hingeAxis * (r.motorImpulse + r.lowerImpulse - r.upperImpulse));
         }
     });
-    for (std::size_t chunk = 0; chunk < breaksInChunk_.size(); ++chunk) {
-        if (breaksInChunk_[chunk] == 0) continue;
-        const std::size_t end = std::min(rows_.size(), (chunk + 1) * kJointChunk);
-        for (std::size_t i = chunk * kJointChunk; i < end; ++i) {
-            JointRow& r = rows_[i];
-            Joint& j = joints[r.joint];
-            if (j.broken || !r.active) continue;
-            if (!(length(j.reactionForce) > j.breakForce || length(j.reactionTorque) > j.breakTorque)) continue;
-            store.markBroken(r.joint);
-            j.linearImpulse = j.angularImpulse = {};
-            j.lowerImpulse = j.upperImpulse = j.motorImpulse = 0;
-            r.active = false;
+    pool.forChunks(batches_.size(), kBatchChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const BallJointBatch& b = batches_[k];
+            for (std::size_t lane = 0; lane < kBatchLanes; ++lane)
+                if (b.joint[lane] != ~0u)
+                    react(b.joint[lane], {b.impulseX[lane], b.impulseY[lane], b.impulseZ[lane]}, {}, {});
         }
+    });
+    if (!anyBreaks.load()) return;
+    for (std::uint32_t i = 0; i < joints.size(); ++i) {
+        if (breaking_[i] == 0) continue;
+        store.markBroken(i);
+        Joint& j = joints[i];
+        j.linearImpulse = j.angularImpulse = {};
+        j.lowerImpulse = j.upperImpulse = j.motorImpulse = 0;
+        rows_[i].active = false;
     }
 }
 

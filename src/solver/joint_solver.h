@@ -103,7 +103,8 @@ public:
     /// as the contact solver's prepare(); without, every joint is in one segment). `h` is the substep. Call once per
     /// step, after ContactSolver::prepare.
     void prepare(const JointStore& store, const BodyStorage& bodies, const ContactSolver& contacts,
-                 const WorldSettings& settings, float h, TaskPool& pool, const Islands* islands = nullptr);
+                 const JointCoupling& coupling, const WorldSettings& settings, float h, TaskPool& pool,
+                 const Islands* islands = nullptr);
     /// Starts a substep for one segment's joints: measures their errors from the body rows' motion
     /// (call after ContactSolver::loadBodies), then applies the accumulated impulses (with `warm`) or clears them.
     /// `pool` runs a coloured segment's colours across the threads (pass none from inside a task).
@@ -116,8 +117,7 @@ public:
     /// substep.
     void finish(JointStore& store, TaskPool& pool);
 
-    /// The step's rows. A coloured segment's ball joints keep their impulses in SIMD batches during the step: their
-    /// rows' impulses are current after finish().
+    /// The step's rows, by joint, of the joints not solved in SIMD batches (see batchedJoints()).
     const std::vector<JointRow>& rows() const { return rows_; }
     /// Colours of the large islands' joints (0 when they run serially in store order), and how many of their joints
     /// run in SIMD batches.
@@ -125,11 +125,33 @@ public:
     std::uint32_t batchedJoints() const { return batchedJoints_; }
 
 private:
+    static constexpr std::uint32_t kInactive = ~0u;
+    /// What partitioning and colouring read of a joint: its body rows (-1 for static bodies), which sides the solver
+    /// moves, its segment (kInactive when broken or with no dynamic side), and whether it runs in a SIMD batch.
+    struct JointLink {
+        std::int32_t rowA = -1, rowB = -1;
+        std::uint32_t segment = kInactive;
+        bool dynamicA = false, dynamicB = false, ball = false, batched = false;
+    };
+    struct BuildInputs {
+        const JointStore& store;
+        const BodyStorage& storage;
+        const ContactSolver& contacts;
+        const JointCoupling& coupling;
+        BallJointSoftness rigid;
+        float h;
+        bool warm;
+    };
+    void buildRow(std::uint32_t joint, const BuildInputs& in);
+    void buildBatch(BallJointBatch& b, std::uint32_t first, std::uint32_t count, std::int32_t stillRow,
+                    const BuildInputs& in) const;
     void beginRow(JointRow& r, const JointFrame& f, SolverBodies& rows, bool warm) const;
     void solveRow(JointRow& r, SolverBodies& rows, bool useBias, float invH);
-    void partition(const ContactSolver& contacts, std::uint32_t segments, TaskPool& pool);
-    void colourLarge(const ContactSolver& contacts, TaskPool& pool);
-    void fillBatch(BallJointBatch& b, std::uint32_t first, std::uint32_t count, std::int32_t stillRow) const;
+    void partition(const ContactSolver& contacts, std::uint32_t segments);
+    void colourLarge(const ContactSolver& contacts);
+    /// Colours segmentRows_[begin, begin + count) as one group (see groups_).
+    void colourGroup(const ContactSolver& contacts, std::uint32_t begin, std::uint32_t count,
+                     std::uint32_t& batchCount);
     /// Runs one segment: row(index into rows_) over its joints in store order, or colour by colour, batch(batch,
     /// body rows) over the colour's ball-joint batches and row() over its other joints, across the pool's threads.
     template <class Batch, class Row>
@@ -145,14 +167,23 @@ private:
     };
 
     std::vector<JointRow> rows_;
-    std::vector<JointFrame> frames_;  ///< by row
-    static constexpr std::uint32_t kInactive = ~0u;
-    std::vector<std::uint32_t> segmentOf_;  ///< by row: its segment, or kInactive
+    std::vector<JointFrame> frames_;    ///< by row
+    std::vector<JointLink> links_;      ///< by joint
+    std::vector<JointLink> lastLinks_;  ///< the links segmentStart_ .. batches_ were laid out for
+    std::uint32_t linkedSegments_ = 0;
     std::vector<std::uint32_t> segmentFill_;
-    std::vector<std::uint8_t> breaksInChunk_;
+    std::vector<std::uint8_t> breaking_;       ///< by joint, in finish()
     std::vector<std::uint32_t> segmentStart_;  ///< segment k's joints are segmentRows_[segmentStart_[k], ...[k + 1])
     std::vector<std::uint32_t> segmentRows_;   ///< indices into rows_, in store order within a segment (or by colour)
     std::vector<Colour> colours_;              ///< empty when the large islands' joints run serially
+    /// Colours [firstColour, + colourCount) coloured together: all the large islands' joints, or two slabs and the
+    /// joints that cross them (colourLarge()).
+    struct Group {
+        std::uint32_t firstColour = 0, colourCount = 0;
+    };
+    std::vector<Group> groups_;
+    std::vector<std::int32_t> slabKeys_;
+    std::vector<std::uint32_t> groupScratch_;
     AlignedVector<BallJointBatch> batches_;
     std::uint32_t batchedJoints_ = 0;
     BallJointSoftness rigid_;                 ///< the step's softness of rigid rows

@@ -16,16 +16,12 @@ void timeJoints(StepContext& step, Work&& work) {
 void prepareSolver(SolverParts& solver, const Contacts& contacts, const std::vector<PointImpulse>& impulses,
                    StepContext& step) {
     const auto timer = step.time(Stage::Solver);
-    if (step.joints) {
-        JointTimer jointTimer(step.profile);
-        solver.joints.couple(solver.jointStore, solver.bodies, solver.coupling, step.pool);
-    }
     solver.contacts.prepare(contacts, impulses, solver.bodies, step.settings, step.effects, step.integration.dt,
                             step.pool, step.joints ? &solver.coupling : nullptr, &solver.islands);
     if (step.joints) {
         JointTimer jointTimer(step.profile);
-        solver.joints.prepare(solver.jointStore, solver.bodies, solver.contacts, step.settings, step.integration.dt,
-                              step.pool, &solver.islands);
+        solver.joints.prepare(solver.jointStore, solver.bodies, solver.contacts, solver.coupling, step.settings,
+                              step.integration.dt, step.pool, &solver.islands);
     }
 }
 

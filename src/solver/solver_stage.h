@@ -24,7 +24,7 @@ struct SolverParts {
     const Islands& islands;
 };
 
-/// First substep, after the islands: couples the joints to the contact colours and prepares the contact rows from
+/// First substep, after the islands (which couple the joints: JointSolver::couple): prepares the contact rows from
 /// this step's manifolds and warm-start impulses.
 void prepareSolver(SolverParts& solver, const Contacts& contacts, const std::vector<PointImpulse>& impulses,
                    StepContext& step);

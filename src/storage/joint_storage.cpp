@@ -1,10 +1,17 @@
 #include "storage/joint_storage.h"
 
 #include <algorithm>
+#include <atomic>
 
 namespace rubble::detail {
 
+std::uint64_t JointStore::nextPairsVersion() {
+    static std::atomic<std::uint64_t> last{0};
+    return last.fetch_add(1, std::memory_order_relaxed) + 1;
+}
+
 JointId JointStore::add(const Joint& joint) {
+    pairsVersion_ = nextPairsVersion();
     const JointId id = ids_.acquire();
     const std::uint32_t slot = id.index;
     if (slot == denseOfSlot_.size()) denseOfSlot_.push_back(0);
@@ -28,6 +35,7 @@ void JointStore::unlink(std::uint32_t bodySlot, std::uint32_t jointSlot) {
 void JointStore::remove(JointId id) {
     const Joint* joint = find(id);
     if (!joint) return;
+    pairsVersion_ = nextPairsVersion();
     const std::uint32_t dense = denseOfSlot_[id.index];
     unlink(joint->bodyA.index, id.index);
     unlink(joint->bodyB.index, id.index);
@@ -58,6 +66,7 @@ std::uint32_t JointStore::removeAttachedTo(BodyId body) {
 void JointStore::markBroken(std::uint32_t dense) {
     Joint& j = joints_[dense];
     if (j.broken) return;
+    pairsVersion_ = nextPairsVersion();
     j.broken = true;
     brokenCount_ += 1;
     brokenReports_.push_back(idOf(dense));

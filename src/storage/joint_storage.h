@@ -61,6 +61,9 @@ public:
     std::uint32_t size() const { return static_cast<std::uint32_t>(joints_.size()); }
     /// Joints that have not broken.
     std::uint32_t activeCount() const { return size() - brokenCount_; }
+    /// Changes whenever a joint is added, removed or broken (unique across stores): which bodies the unbroken joints
+    /// join is the same as long as it does.
+    std::uint64_t pairsVersion() const { return pairsVersion_; }
     JointId idOf(std::uint32_t dense) const { return ids_.idAt(joints_[dense].slot); }
 
     /// Marks a joint broken and queues its report.
@@ -80,6 +83,8 @@ private:
     std::vector<std::vector<std::uint32_t>> jointsOfBody_;  ///< body slot -> joint slots
     std::vector<JointId> brokenReports_;
     std::uint32_t brokenCount_ = 0;
+    std::uint64_t pairsVersion_ = nextPairsVersion();
+    static std::uint64_t nextPairsVersion();
 };
 
 }  // namespace rubble::detail

@@ -71,7 +71,14 @@ void buildIslands(World::Impl& w, StepContext& step) {
     {
         const auto timer = step.time(Stage::Islands);
         w.islandEdges.clear();
-        w.joints.appendEdges(w.bodies, w.islandEdges);
+        if (step.joints) {
+            // The joints' bodies, for the islands now and the solver's rows after.
+            detail::JointTimer jointTimer(step.profile);
+            w.jointSolver.couple(w.joints, w.bodies, w.jointCoupling, step.pool);
+            w.jointCoupling.appendEdges(w.islandEdges);
+        } else {
+            w.joints.appendEdges(w.bodies, w.islandEdges);
+        }
         w.sleeping.linkSleepingIslands(w.bodies, w.islandEdges);
         w.islandBuilder.build(w.contacts, w.islandEdges, w.bodies.moving, step.pool, w.islands);
         if (step.sleeping && w.sleeping.wakeTouched(w.islands, w.bodies, w.integrationScratch, w.contacts, w.impulses,

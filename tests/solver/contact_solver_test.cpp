@@ -410,8 +410,8 @@ TEST(ContactSolver, JointsInBlocksEndWhereTheSerialJointPassEnds) {
     blocked.loadBodies(w.bodies.moving, *w.pool);
     together.loadBodies(w.bodies.moving, *w.pool);
     detail::JointSolver blockedJoints, togetherJoints;
-    blockedJoints.prepare(w.joints, w.bodies, blocked, w.settings, h, *w.pool, &w.islands);
-    togetherJoints.prepare(w.joints, w.bodies, together, w.settings, h, *w.pool);
+    blockedJoints.prepare(w.joints, w.bodies, blocked, w.jointCoupling, w.settings, h, *w.pool, &w.islands);
+    togetherJoints.prepare(w.joints, w.bodies, together, w.jointCoupling, w.settings, h, *w.pool);
 
     auto jointPass = [&](std::uint32_t segment, int pass) {
         if (pass == 0)
