@@ -13,7 +13,12 @@
 // islands solves its joints serially in its own task. The large islands' joints run before their contact colours,
 // serially in the joint store's order when they are few (a chain solved from one end carries its load down in one
 // pass), else in colours of their own (greedy, in store order: no two joints of a colour share a moving body) whose
-// joints run across the threads. Either way the result does not depend on the thread count.
+// joints run across the threads, the ball joints kBatchLanes at a time in SIMD lanes (solver/ball_joint_batch.h).
+// When the joints split cleanly by body row into two slabs (a sheet or lattice, whose bodies take rows in the order
+// the joints name them), each slab's colours run whole in one task per pass and only the joints across the cut colour
+// by colour after them, so a pass waits for the threads once rather than once per colour. The rows, colours and
+// slabs depend only on the joints, the islands and the body rows, never on the thread count, and the layout is kept
+// from step to step while those stay the same.
 //
 // Position error is fed back in the velocity rows. With Baumgarte (and with split impulses, whose pseudo-velocities
 // only serve contacts) a fraction SolverSettings::baumgarte of the error is removed per substep; with the soft step
@@ -95,8 +100,8 @@ float hingeAngle(const Joint& joint, const BodyStorage& storage);
 
 class JointSolver {
 public:
-    /// The moving bodies of the unbroken joints (rows for the contact solver) and the jointed pairs whose contacts
-    /// are not solved. Call before ContactSolver::prepare.
+    /// The moving bodies of the unbroken joints (rows for the contact solver, edges for the island builder) and the
+    /// jointed pairs whose contacts are not solved. Call before the islands are built.
     void couple(const JointStore& store, const BodyStorage& bodies, JointCoupling& out, TaskPool& pool) const;
     /// Builds the step's rows from the bodies' poses and the impulses kept in the store (zero without warm starting),
     /// and lists them by the contact solver's segment of their island (with `islands`, built over the same contacts

@@ -25,7 +25,7 @@ struct SolverParts {
 };
 
 /// First substep, after the islands (which couple the joints: JointSolver::couple): prepares the contact rows from
-/// this step's manifolds and warm-start impulses.
+/// this step's manifolds and warm-start impulses, then the joints' rows.
 void prepareSolver(SolverParts& solver, const Contacts& contacts, const std::vector<PointImpulse>& impulses,
                    StepContext& step);
 
