@@ -33,6 +33,15 @@ struct alignas(64) BallJointBatch {
     float impulseX[kBatchLanes], impulseY[kBatchLanes], impulseZ[kBatchLanes];  ///< accumulated
 };
 
+/// What building a batch reads of its lanes' bodies (side 0 is A, 1 is B), gathered lane by lane from the body store:
+/// the centre of mass, the orientation and the anchor from the centre of mass in the body's frame. An empty lane
+/// holds zeros and the identity.
+struct BallJointPoses {
+    float px[2][kBatchLanes], py[2][kBatchLanes], pz[2][kBatchLanes];
+    float qx[2][kBatchLanes], qy[2][kBatchLanes], qz[2][kBatchLanes], qw[2][kBatchLanes];
+    float ax[2][kBatchLanes], ay[2][kBatchLanes], az[2][kBatchLanes];
+};
+
 /// The step's softness of the rigid rows: impulse = -massScale * K^-1 (J v + biasRate * C) - impulseScale * total.
 struct BallJointSoftness {
     float biasRate = 0, massScale = 1, impulseScale = 0;
@@ -91,6 +100,47 @@ template <class F>
 simd::QuatW<F> rotationOf(const Vec3W<F>& motion) {
     const Vec3W<F> u = motion * F(0.5f);
     return {u.x, u.y, u.z, simd::sqrt(simd::max(F(1.0f) - dot(u, u), F(0.0f)))};
+}
+
+/// K += m 1 - [r]x I [r]x: how an impulse at the anchor r changes the anchor's velocity (the scalar rows' formula,
+/// operation for operation, so both agree bit for bit).
+template <class F>
+void addPointMass(simd::SymMat3W<F>& k, const MassW<F>& mass, const Vec3W<F>& r) {
+    const F zero(0.0f), one(1.0f);
+    const simd::SymMat3W<F>& inertia = mass.inverseInertia;
+    const Vec3W<F> cx = cross(inertia * cross(r, Vec3W<F>{one, zero, zero}), r);
+    const Vec3W<F> cy = cross(inertia * cross(r, Vec3W<F>{zero, one, zero}), r);
+    const Vec3W<F> cz = cross(inertia * cross(r, Vec3W<F>{zero, zero, one}), r);
+    k.xx += mass.inverseMass + cx.x, k.yy += mass.inverseMass + cy.y, k.zz += mass.inverseMass + cz.z;
+    k.xy += cy.x, k.xz += cz.x, k.yz += cz.y;
+}
+
+/// The step's frames and effective masses of a batch whose body rows are set, from its lanes' poses.
+template <class F>
+RUBBLE_FLATTEN void build(BallJointBatch& b, const BallJointPoses& p, const MassRow* mass) {
+    Vec3W<F> r[2], centre[2];
+    for (int side = 0; side < 2; ++side) {
+        const simd::QuatW<F> q = simd::QuatW<F>::load(p.qx[side], p.qy[side], p.qz[side], p.qw[side], 0);
+        r[side] = rotate(q, Vec3W<F>::load(p.ax[side], p.ay[side], p.az[side], 0));
+        centre[side] = Vec3W<F>::load(p.px[side], p.py[side], p.pz[side], 0);
+    }
+    put3(b.frameAx, b.frameAy, b.frameAz, 0, r[0]);
+    put3(b.frameBx, b.frameBy, b.frameBz, 0, r[1]);
+    put3(b.centresX, b.centresY, b.centresZ, 0, centre[1] - centre[0]);
+    const F zero(0.0f);
+    simd::SymMat3W<F> k{zero, zero, zero, zero, zero, zero};
+    addPointMass(k, loadMasses<F>(mass, b.bodyA), r[0]);
+    addPointMass(k, loadMasses<F>(mass, b.bodyB), r[1]);
+    // Its inverse by cofactors; zero where K is singular (no mass on either side: an empty lane).
+    const F c00 = k.yy * k.zz - k.yz * k.yz;
+    const F c01 = k.xz * k.yz - k.xy * k.zz;
+    const F c02 = k.xy * k.yz - k.xz * k.yy;
+    const F det = k.xx * c00 + k.xy * c01 + k.xz * c02;
+    const auto positive = det > zero;
+    const F inv = F(1.0f) / simd::select(positive, det, F(1.0f));
+    const F entries[6] = {c00 * inv, (k.xx * k.zz - k.xz * k.xz) * inv, (k.xx * k.yy - k.xy * k.xy) * inv, c01 * inv,
+                          c02 * inv, (k.xy * k.xz - k.xx * k.yz) * inv};
+    for (int e = 0; e < 6; ++e) simd::store(b.pointMass[e], simd::select(positive, entries[e], zero));
 }
 
 template <class F>

@@ -287,14 +287,10 @@ void JointSolver::prepare(const JointStore& store, const BodyStorage& storage, c
             if (!links_[i].batched) buildRow(static_cast<std::uint32_t>(i), in);
     });
     const auto stillRow = static_cast<std::int32_t>(bodyRows.count);
-    for (const Colour& colour : colours_)
-        pool.forChunks(colour.batchCount, kBatchChunk, [&](std::size_t, std::size_t from, std::size_t to, int) {
-            for (std::size_t k = from; k < to; ++k) {
-                const std::uint32_t first = colour.firstBall + static_cast<std::uint32_t>(k * kBatchLanes);
-                buildBatch(batches_[colour.firstBatch + k], first,
-                           std::min<std::uint32_t>(colour.first - first, kBatchLanes), stillRow, in);
-            }
-        });
+    pool.forChunks(batches_.size(), kBatchChunk, [&](std::size_t, std::size_t from, std::size_t to, int) {
+        for (std::size_t k = from; k < to; ++k)
+            buildBatch(batches_[k], batchJoints_[k].first, batchJoints_[k].count, stillRow, in);
+    });
 }
 
 void JointSolver::buildRow(std::uint32_t i, const BuildInputs& in) {
@@ -377,32 +373,48 @@ void JointSolver::buildRow(std::uint32_t i, const BuildInputs& in) {
 
 void JointSolver::buildBatch(BallJointBatch& b, std::uint32_t first, std::uint32_t count, std::int32_t stillRow,
                              const BuildInputs& in) const {
+    // The lanes' poses gathered one by one (the bodies lie anywhere in the store), the rest in SIMD lanes.
     const std::vector<Joint>& joints = in.store.joints();
+    const MovingBodies& m = in.storage.moving;
+    const StaticBodies& statics = in.storage.statics;
+    BallJointPoses poses{};
     for (std::uint32_t lane = 0; lane < kBatchLanes; ++lane) {
-        // An empty lane: the still row on both sides, no geometry, no mass, no impulse.
-        Side A, B;
-        Vec3 impulse;
-        JointSym3 mass;
         b.joint[lane] = ~0u;
-        if (lane < count) {
-            const std::uint32_t i = segmentRows_[first + lane];
-            const Joint& j = joints[i];
-            A = sideOf(in.storage, in.contacts, j.bodyA, in.coupling.bodies[2 * i], j.localAnchorA);
-            B = sideOf(in.storage, in.contacts, j.bodyB, in.coupling.bodies[2 * i + 1], j.localAnchorB);
-            mass = pointMass(A, B);
-            if (in.warm) impulse = j.linearImpulse;
-            b.joint[lane] = i;
+        b.bodyA[lane] = b.bodyB[lane] = stillRow;
+        b.impulseX[lane] = b.impulseY[lane] = b.impulseZ[lane] = 0;
+        if (lane >= count) {  // an empty lane: the still row on both sides, no geometry, no mass, no impulse
+            poses.qw[0][lane] = poses.qw[1][lane] = 1;
+            continue;
         }
-        b.bodyA[lane] = A.row >= 0 ? A.row : stillRow;
-        b.bodyB[lane] = B.row >= 0 ? B.row : stillRow;
-        const Vec3 centres = B.com - A.com;
-        b.frameAx[lane] = A.r.x, b.frameAy[lane] = A.r.y, b.frameAz[lane] = A.r.z;
-        b.frameBx[lane] = B.r.x, b.frameBy[lane] = B.r.y, b.frameBz[lane] = B.r.z;
-        b.centresX[lane] = centres.x, b.centresY[lane] = centres.y, b.centresZ[lane] = centres.z;
-        const float entries[6] = {mass.xx, mass.yy, mass.zz, mass.xy, mass.xz, mass.yz};
-        for (int e = 0; e < 6; ++e) b.pointMass[e][lane] = entries[e];
-        b.impulseX[lane] = impulse.x, b.impulseY[lane] = impulse.y, b.impulseZ[lane] = impulse.z;
+        const std::uint32_t i = segmentRows_[first + lane];
+        const Joint& j = joints[i];
+        b.joint[lane] = i;
+        if (in.warm)
+            b.impulseX[lane] = j.linearImpulse.x, b.impulseY[lane] = j.linearImpulse.y,
+            b.impulseZ[lane] = j.linearImpulse.z;
+        for (int side = 0; side < 2; ++side) {
+            const std::uint32_t coupled = in.coupling.bodies[2 * i + static_cast<std::uint32_t>(side)];
+            const Vec3 local = side == 0 ? j.localAnchorA : j.localAnchorB;
+            if (coupled == kNoCoupledBody) {  // static: its origin is its centre of mass
+                const std::uint32_t d = in.storage.find(side == 0 ? j.bodyA : j.bodyB)->dense;
+                poses.px[side][lane] = statics.px[d], poses.py[side][lane] = statics.py[d],
+                poses.pz[side][lane] = statics.pz[d];
+                poses.qx[side][lane] = statics.qx[d], poses.qy[side][lane] = statics.qy[d],
+                poses.qz[side][lane] = statics.qz[d], poses.qw[side][lane] = statics.qw[d];
+                poses.ax[side][lane] = local.x, poses.ay[side][lane] = local.y, poses.az[side][lane] = local.z;
+                continue;
+            }
+            const std::uint32_t d = coupled;
+            poses.px[side][lane] = m.px[d], poses.py[side][lane] = m.py[d], poses.pz[side][lane] = m.pz[d];
+            poses.qx[side][lane] = m.qx[d], poses.qy[side][lane] = m.qy[d], poses.qz[side][lane] = m.qz[d],
+            poses.qw[side][lane] = m.qw[d];
+            poses.ax[side][lane] = local.x - m.lcx[d], poses.ay[side][lane] = local.y - m.lcy[d],
+            poses.az[side][lane] = local.z - m.lcz[d];
+            const std::int32_t row = in.contacts.solverIndexOf(d);
+            (side == 0 ? b.bodyA : b.bodyB)[lane] = row >= 0 ? row : stillRow;
+        }
     }
+    ball_joint_kernels::build<simd::FloatW>(b, poses, in.contacts.bodies().mass.data());
 }
 
 void JointSolver::beginRow(JointRow& r, const JointFrame& f, SolverBodies& rows, bool warm) const {
@@ -628,6 +640,7 @@ void JointSolver::colourLarge(const ContactSolver& contacts) {
     colours_.clear();
     groups_.clear();
     batches_.clear();
+    batchJoints_.clear();
     batchedJoints_ = 0;
     const std::size_t large = segmentStart_.size() - 2;
     const std::uint32_t begin = segmentStart_[large], count = segmentStart_[large + 1] - begin;
@@ -712,6 +725,10 @@ void JointSolver::colourGroup(const ContactSolver& contacts, std::uint32_t begin
         ballFill[c] = at;
         otherFill[c] = at + balls[c];
         at += balls[c] + others[c];
+        for (std::uint32_t k = 0; k < colour.batchCount; ++k)
+            batchJoints_.push_back({colour.firstBall + k * static_cast<std::uint32_t>(kBatchLanes),
+                                    std::min<std::uint32_t>(balls[c] - k * static_cast<std::uint32_t>(kBatchLanes),
+                                                            static_cast<std::uint32_t>(kBatchLanes))});
         batchCount += colour.batchCount;
         batchedJoints_ += balls[c];
         colours_.push_back(colour);

@@ -190,6 +190,11 @@ private:
     std::vector<std::int32_t> slabKeys_;
     std::vector<std::uint32_t> groupScratch_;
     AlignedVector<BallJointBatch> batches_;
+    /// Batch k's lanes are joints segmentRows_[first, first + count).
+    struct BatchJoints {
+        std::uint32_t first = 0, count = 0;
+    };
+    std::vector<BatchJoints> batchJoints_;
     std::uint32_t batchedJoints_ = 0;
     BallJointSoftness rigid_;                 ///< the step's softness of rigid rows
     std::vector<std::uint64_t> bodyColours_;  ///< colouring scratch, by body row
