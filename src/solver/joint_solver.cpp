@@ -277,7 +277,7 @@ void JointSolver::prepare(const JointStore& store, const BodyStorage& storage, c
     if (sameLinks()) {
         links_ = lastLinks_;  // with their batched flags
     } else {
-        partition(contacts, segments);
+        partition(contacts, storage.moving, segments);
         lastLinks_ = links_;
         linkedSegments_ = segments;
     }
@@ -623,7 +623,7 @@ void JointSolver::solve(SolverBodies& rows, bool useBias, std::uint32_t segment,
         [&](std::uint32_t i) { solveRow(rows_[i], rows, useBias, invH); });
 }
 
-void JointSolver::partition(const ContactSolver& contacts, std::uint32_t segments) {
+void JointSolver::partition(const ContactSolver& contacts, const MovingBodies& m, std::uint32_t segments) {
     // Counting sort of the active joints by segment, stable so that each segment keeps the store order.
     segmentStart_.assign(segments + 1, 0);
     for (const JointLink& l : links_)
@@ -633,10 +633,10 @@ void JointSolver::partition(const ContactSolver& contacts, std::uint32_t segment
     segmentFill_.assign(segmentStart_.begin(), segmentStart_.end() - 1);
     for (std::uint32_t i = 0; i < links_.size(); ++i)
         if (links_[i].segment != kInactive) segmentRows_[segmentFill_[links_[i].segment]++] = i;
-    colourLarge(contacts);
+    colourLarge(contacts, m);
 }
 
-void JointSolver::colourLarge(const ContactSolver& contacts) {
+void JointSolver::colourLarge(const ContactSolver& contacts, const MovingBodies& m) {
     colours_.clear();
     groups_.clear();
     batches_.clear();
@@ -645,22 +645,40 @@ void JointSolver::colourLarge(const ContactSolver& contacts) {
     const std::size_t large = segmentStart_.size() - 2;
     const std::uint32_t begin = segmentStart_[large], count = segmentStart_[large + 1] - begin;
     if (count < kColouredJoints) return;
-    // Two slabs when the joints split cleanly by body row (the islands number a body's rows island by island in
-    // body order, so a sheet or a lattice built in order splits across its middle): each slab's colours then run
-    // whole in one task per pass, and only the joints that cross the cut colour by colour after them. A pass costs
-    // one wait for the threads instead of one per colour. The cut: the median of the joints' lowest dynamic rows.
-    const auto lowRow = [&](const JointLink& l) {
-        return l.dynamicA && (!l.dynamicB || l.rowA < l.rowB) ? l.rowA : l.rowB;
+    // Two slabs when the joints split cleanly across the middle of the island (a sheet, a lattice, a bridge): each
+    // slab's colours then run whole in one task per pass, and only the joints that cross the cut colour by colour
+    // after them, so a pass costs one wait for the threads instead of one per colour. The cut: across the longest
+    // side of the box around the joints' bodies, at the median of the joints' lowest body; a joint lies on the side
+    // of the cut where all its dynamic bodies lie, or crosses. Made from this step's places and kept with the rest
+    // of the layout: a slab's joints share no moving body with the other slab's however the bodies move after.
+    const std::vector<std::uint32_t>& denseOfRow = contacts.bodies().moving;
+    const auto place = [&](std::int32_t row) {
+        const std::uint32_t d = denseOfRow[static_cast<std::size_t>(row)];
+        return Vec3{m.px[d], m.py[d], m.pz[d]};
+    };
+    Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+    for (std::uint32_t i = 0; i < count; ++i) {
+        const JointLink& l = links_[segmentRows_[begin + i]];
+        const Vec3 p = place(l.dynamicA ? l.rowA : l.rowB);
+        lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+        hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+    const Vec3 extent = hi - lo;
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+    const float* coordinate = axis == 0 ? m.px.data() : (axis == 1 ? m.py.data() : m.pz.data());
+    const auto along = [&](std::int32_t row) { return coordinate[denseOfRow[static_cast<std::size_t>(row)]]; };
+    const auto lowest = [&](const JointLink& l) {
+        return l.dynamicA && l.dynamicB ? std::min(along(l.rowA), along(l.rowB)) : along(l.dynamicA ? l.rowA : l.rowB);
     };
     slabKeys_.resize(count);
-    for (std::uint32_t i = 0; i < count; ++i) slabKeys_[i] = lowRow(links_[segmentRows_[begin + i]]);
+    for (std::uint32_t i = 0; i < count; ++i) slabKeys_[i] = lowest(links_[segmentRows_[begin + i]]);
     const auto middle = slabKeys_.begin() + count / 2;
     std::nth_element(slabKeys_.begin(), middle, slabKeys_.end());
-    const std::int32_t cut = *middle;
+    const float cut = *middle;
     std::uint32_t sizes[3] = {};
     const auto groupOf = [&](const JointLink& l) {
-        const bool belowA = !l.dynamicA || l.rowA < cut, belowB = !l.dynamicB || l.rowB < cut;
-        const bool aboveA = !l.dynamicA || l.rowA >= cut, aboveB = !l.dynamicB || l.rowB >= cut;
+        const bool belowA = !l.dynamicA || along(l.rowA) < cut, belowB = !l.dynamicB || along(l.rowB) < cut;
+        const bool aboveA = !l.dynamicA || along(l.rowA) >= cut, aboveB = !l.dynamicB || along(l.rowB) >= cut;
         return belowA && belowB ? 0u : (aboveA && aboveB ? 1u : 2u);
     };
     for (std::uint32_t i = 0; i < count; ++i) ++sizes[groupOf(links_[segmentRows_[begin + i]])];

@@ -14,11 +14,11 @@
 // serially in the joint store's order when they are few (a chain solved from one end carries its load down in one
 // pass), else in colours of their own (greedy, in store order: no two joints of a colour share a moving body) whose
 // joints run across the threads, the ball joints kBatchLanes at a time in SIMD lanes (solver/ball_joint_batch.h).
-// When the joints split cleanly by body row into two slabs (a sheet or lattice, whose bodies take rows in the order
-// the joints name them), each slab's colours run whole in one task per pass and only the joints across the cut colour
-// by colour after them, so a pass waits for the threads once rather than once per colour. The rows, colours and
-// slabs depend only on the joints, the islands and the body rows, never on the thread count, and the layout is kept
-// from step to step while those stay the same.
+// When the joints split cleanly into two slabs across the middle of the island (a sheet, a lattice, a bridge), each
+// slab's colours run whole in one task per pass and only the joints across the cut colour by colour after them, so a
+// pass waits for the threads once rather than once per colour. The rows, colours and slabs depend only on the
+// joints, the islands, the body rows and the bodies' places, never on the thread count, and the layout is kept from
+// step to step while each joint's body rows and segment stay the same.
 //
 // Position error is fed back in the velocity rows. With Baumgarte (and with split impulses, whose pseudo-velocities
 // only serve contacts) a fraction SolverSettings::baumgarte of the error is removed per substep; with the soft step
@@ -128,6 +128,8 @@ public:
     /// run in SIMD batches.
     std::uint32_t colourCount() const { return static_cast<std::uint32_t>(colours_.size()); }
     std::uint32_t batchedJoints() const { return batchedJoints_; }
+    /// Whether the large islands' joints run as two slabs and the joints between them.
+    bool slabs() const { return groups_.size() == 3; }
 
 private:
     static constexpr std::uint32_t kInactive = ~0u;
@@ -152,8 +154,8 @@ private:
                     const BuildInputs& in) const;
     void beginRow(JointRow& r, const JointFrame& f, SolverBodies& rows, bool warm) const;
     void solveRow(JointRow& r, SolverBodies& rows, bool useBias, float invH);
-    void partition(const ContactSolver& contacts, std::uint32_t segments);
-    void colourLarge(const ContactSolver& contacts);
+    void partition(const ContactSolver& contacts, const MovingBodies& m, std::uint32_t segments);
+    void colourLarge(const ContactSolver& contacts, const MovingBodies& m);
     /// Colours segmentRows_[begin, begin + count) as one group (see groups_).
     void colourGroup(const ContactSolver& contacts, std::uint32_t begin, std::uint32_t count,
                      std::uint32_t& batchCount);
@@ -187,7 +189,7 @@ private:
         std::uint32_t firstColour = 0, colourCount = 0;
     };
     std::vector<Group> groups_;
-    std::vector<std::int32_t> slabKeys_;
+    std::vector<float> slabKeys_;
     std::vector<std::uint32_t> groupScratch_;
     AlignedVector<BallJointBatch> batches_;
     /// Batch k's lanes are joints segmentRows_[first, first + count).

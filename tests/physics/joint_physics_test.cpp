@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rubble/world.h"
+#include "support/hanging_sheet.h"
 #include "support/standard_solver.h"
 
 namespace rubble {
@@ -403,123 +404,61 @@ TEST(JointPhysics, BreakableJointBreaksAboveItsForceOnly) {
     }
 }
 
-/// A vertical sheet of kSide x kSide spheres of 1 kg, 1 m apart, each ball-jointed to its right and lower neighbours
-/// at the midpoints, hung from its static top row (Box3D's joint_grid, smaller): 870 joints down the columns and 841
-/// across the rows, one island. At the defaults (soft step).
-struct Sheet {
-    static constexpr int kSide = 30;
-    World world;
-    std::vector<BodyId> nodes;  ///< by place, row by row from the top
-    std::vector<JointId> down;  ///< column joints: down[(row - 1) * kSide + col] joins row - 1 and row
-    std::vector<JointId> across;
+using test::Sheet;
 
-    /// `scattered`: the spheres and their joints are created in a shuffled order, so that the solver's body rows do
-    /// not split the sheet in two (joint_solver.h: slabs).
-    explicit Sheet(int threads, bool scattered = false)
-        : world([threads] {
-              WorldSettings s;
-              s.threads = threads;
-              s.effects = s.effects.without(Effect::Sleeping);
-              return s;
-          }()),
-          nodes(std::size_t(kSide * kSide)) {
-        std::vector<int> order(std::size_t(kSide * kSide));
-        for (std::size_t k = 0; k < order.size(); ++k) order[k] = int(k);
-        if (scattered) {
-            std::uint32_t random = 12345;
-            for (std::size_t k = order.size() - 1; k > 0; --k) {
-                random = random * 1664525u + 1013904223u;
-                std::swap(order[k], order[(random >> 8) % (k + 1)]);
-            }
-        }
-        for (const int k : order) {
-            const int row = k / kSide, col = k % kSide;
-            const Vec3 at{float(col), -float(row), 0};
-            nodes[std::size_t(k)] = row == 0 ? addStatic(world, at) : addBall(world, at, 1.0f, 0.4f);
-        }
-        // Each sphere's joints up and to the left, in the same order: the solver numbers the rows of bodies in no
-        // contact in the order the joints name them.
-        down.resize(std::size_t((kSide - 1) * kSide));
-        across.resize(std::size_t((kSide - 1) * (kSide - 1)));
-        for (const int k : order) {
-            const int row = k / kSide, col = k % kSide;
-            if (row == 0) continue;
-            BallJointDef ball;
-            ball.bodyA = node(row - 1, col);
-            ball.bodyB = node(row, col);
-            ball.localAnchorA = {0, -0.5f, 0};
-            ball.localAnchorB = {0, 0.5f, 0};
-            down[std::size_t((row - 1) * kSide + col)] = world.createJoint(ball);
-            if (col == 0) continue;
-            ball.bodyA = node(row, col - 1);
-            ball.localAnchorA = {0.5f, 0, 0};
-            ball.localAnchorB = {-0.5f, 0, 0};
-            across[std::size_t((row - 1) * (kSide - 1) + col - 1)] = world.createJoint(ball);
-        }
-    }
-    BodyId node(int row, int col) const { return nodes[std::size_t(row * kSide + col)]; }
-    float stretch() const {
-        float worst = 0;
-        for (const std::vector<JointId>* joints : {&down, &across})
-            for (const JointId j : *joints) {
-                const auto [a, b] = world.jointBodies(j);
-                const Vec3 pa = world.transform(a).position, pb = world.transform(b).position;
-                worst = std::max(worst, std::fabs(length(pb - pa) - 1.0f));
-            }
-        return worst;
-    }
+/// The sheets the joint solver lays out each way (src/solver/joint_solver.h): built in order, scattered (spheres and
+/// joints created in a shuffled order), braced (each sphere also jointed to its mirror image across the middle, so
+/// that a fifth of the joints cross any cut there and the sheet is coloured as one; JointSolver tests check which).
+struct SheetKind {
+    const char* name;
+    bool scattered, braced;
 };
+constexpr SheetKind kSheetKinds[] = {{"in order", false, false}, {"scattered", true, false}, {"braced", false, true}};
 
-// The sheet's joints are many enough to run in colours across the threads, the ball joints in SIMD lanes (all
-// 1,711), in two slabs (built in order) or in one colouring (scattered). Hanging straight, each column carries the
-// spheres below each joint: once it rests, the joint k rows below the top pulls up with (29 - k) m g and the joints
-// across carry nothing. That balance is reached only if every lane of every batch applies its joint: with one lane
-// of each batch left out the sheet flies apart. After 4 s the column forces are within 0.08 N (in order) and 0.19 N
-// (scattered) of the weights below, 0.03% and 0.07% of the top joint's 284 N, and the joints across carry under
-// 0.03 N; bound: 1% of the top joint's load, a margin for the residue of 2 + 1 iterations on a 29-joint column.
-// Stretch: what the soft rows at 60 Hz give under the top joint's load (measured 3.9 mm; bound 1 cm, Box3D's quality
-// on its sheet).
+// The sheet's joints are many enough to run in colours across the threads, the ball joints in SIMD lanes (all of
+// them: 1,711, or 2,146 braced). Hanging straight, each column carries the spheres below each joint: once it rests,
+// the joint k rows below the top pulls up with (29 - k) m g, and the joints across and the braces carry nothing (by
+// the sheet's symmetry). That balance is reached only if every lane of every batch applies its joint: with one lane
+// of each batch left out the sheet flies apart. After 4 s the column forces are within 0.2 N of the weights below
+// (0.07% of the top joint's 284 N) and the joints across carry under 0.03 N; bound: 1% of the top joint's load, a
+// margin for the residue of 2 + 1 iterations on a 29-joint column. Stretch: what the soft rows at 60 Hz give under
+// the top joint's load (measured 3.9 mm; bound 1 cm, Box3D's quality on its sheet).
 TEST(JointPhysics, HangingSheetCarriesTheWeightBelowEachJoint) {
-    for (const bool scattered : {false, true}) {
-        Sheet sheet(2, scattered);
+    for (const SheetKind& kind : kSheetKinds) {
+        Sheet sheet(2, kind.scattered, kind.braced);
         for (int i = 0; i < 240; ++i) sheet.world.step(kDt);
         const Profile& profile = sheet.world.lastProfile();
-        EXPECT_GT(profile.jointColours, 1u);
-        EXPECT_EQ(profile.batchedJoints, sheet.down.size() + sheet.across.size());
+        EXPECT_GT(profile.jointColours, 1u) << kind.name;
+        EXPECT_EQ(profile.batchedJoints, sheet.down.size() + sheet.across.size() + sheet.braces.size()) << kind.name;
         const float top = (Sheet::kSide - 1) * kG;
-        float worstDown = 0, worstAcross = 0;
+        float worstDown = 0, worstOther = 0;
         for (int row = 1; row < Sheet::kSide; ++row)
             for (int col = 0; col < Sheet::kSide; ++col) {
                 const Vec3 f = sheet.world.jointReactionForce(sheet.down[std::size_t((row - 1) * Sheet::kSide + col)]);
                 // The force on B (the lower sphere) holds it and the spheres below it up.
                 worstDown = std::max(worstDown, std::fabs(f.y - float(Sheet::kSide - row) * kG));
             }
-        for (const JointId j : sheet.across)
-            worstAcross = std::max(worstAcross, length(sheet.world.jointReactionForce(j)));
-        EXPECT_LT(worstDown, 0.01f * top) << "scattered " << scattered;
-        EXPECT_LT(worstAcross, 0.01f * top) << "scattered " << scattered;
-        EXPECT_LT(sheet.stretch(), 0.01f) << "scattered " << scattered;
+        for (const std::vector<JointId>* others : {&sheet.across, &sheet.braces})
+            for (const JointId j : *others)
+                worstOther = std::max(worstOther, length(sheet.world.jointReactionForce(j)));
+        EXPECT_LT(worstDown, 0.01f * top) << kind.name;
+        EXPECT_LT(worstOther, 0.01f * top) << kind.name;
+        EXPECT_LT(sheet.stretch(), 0.01f) << kind.name;
     }
 }
 
-// Colours run across the threads in any order: the result does not depend on the thread count. The sheet built in
-// order splits into two slabs (two colourings of four colours and the crossing joints' two), the scattered one does
-// not (one colouring of the whole sheet); both carry the weights below each joint.
+// Colours and slabs run across the threads in any order: the result does not depend on the thread count, however
+// the sheet was laid out.
 TEST(JointPhysics, HangingSheetIsIdenticalForOneAndTwoThreads) {
-    for (const bool scattered : {false, true}) {
-        Sheet one(1, scattered), two(2, scattered);
+    for (const SheetKind& kind : kSheetKinds) {
+        Sheet one(1, kind.scattered, kind.braced), two(2, kind.scattered, kind.braced);
         for (Sheet* s : {&one, &two}) {
             for (int i = 0; i < 240; ++i) s->world.step(kDt);
             // Then swinging, not only hanging: a push sideways at a corner.
             s->world.applyLinearImpulse(s->node(Sheet::kSide - 1, Sheet::kSide - 1), {0, 0, 5});
             for (int i = 0; i < 30; ++i) s->world.step(kDt);
         }
-        const std::uint32_t colours = one.world.lastProfile().jointColours;
-        if (scattered)
-            EXPECT_LE(colours, 7u) << "one colouring of a grid";
-        else
-            EXPECT_GE(colours, 8u) << "two slabs and the joints between them";
-        EXPECT_EQ(one.world.stateHash(), two.world.stateHash()) << "scattered " << scattered;
+        EXPECT_EQ(one.world.stateHash(), two.world.stateHash()) << kind.name;
     }
 }
 
