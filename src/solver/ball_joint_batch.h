@@ -115,6 +115,9 @@ void addPointMass(simd::SymMat3W<F>& k, const MassW<F>& mass, const Vec3W<F>& r)
     k.xy += cy.x, k.xz += cz.x, k.yz += cz.y;
 }
 
+template <class F>
+void storePointMass(BallJointBatch& b, const MassRow* mass, const Vec3W<F>& rA, const Vec3W<F>& rB);
+
 /// The step's frames and effective masses of a batch whose body rows are set, from its lanes' poses.
 template <class F>
 RUBBLE_FLATTEN void build(BallJointBatch& b, const BallJointPoses& p, const MassRow* mass) {
@@ -127,10 +130,16 @@ RUBBLE_FLATTEN void build(BallJointBatch& b, const BallJointPoses& p, const Mass
     put3(b.frameAx, b.frameAy, b.frameAz, 0, r[0]);
     put3(b.frameBx, b.frameBy, b.frameBz, 0, r[1]);
     put3(b.centresX, b.centresY, b.centresZ, 0, centre[1] - centre[0]);
+    storePointMass(b, mass, r[0], r[1]);
+}
+
+/// The inverse of the point rows' effective mass at the anchors rA, rB into the batch.
+template <class F>
+void storePointMass(BallJointBatch& b, const MassRow* mass, const Vec3W<F>& rA, const Vec3W<F>& rB) {
     const F zero(0.0f);
     simd::SymMat3W<F> k{zero, zero, zero, zero, zero, zero};
-    addPointMass(k, loadMasses<F>(mass, b.bodyA), r[0]);
-    addPointMass(k, loadMasses<F>(mass, b.bodyB), r[1]);
+    addPointMass(k, loadMasses<F>(mass, b.bodyA), rA);
+    addPointMass(k, loadMasses<F>(mass, b.bodyB), rB);
     // Its inverse by cofactors; zero where K is singular (no mass on either side: an empty lane).
     const F c00 = k.yy * k.zz - k.yz * k.yz;
     const F c01 = k.xz * k.yz - k.xy * k.zz;
@@ -154,6 +163,9 @@ RUBBLE_FLATTEN void begin(BallJointBatch& b, std::size_t lane, const BodyRows& r
     put3(b.rAx, b.rAy, b.rAz, lane, rA);
     put3(b.rBx, b.rBy, b.rBz, lane, rB);
     put3(b.errorX, b.errorY, b.errorZ, lane, error);
+    // The effective mass at this substep's anchors: a light body on a long lever (a cloth of small spheres) turns its
+    // anchor far within a step, and the step's first K would then push the wrong way.
+    storePointMass<F>(b, rows.mass, rA, rB);
     if (!warm) {
         put3(b.impulseX, b.impulseY, b.impulseZ, lane, Vec3W<F>{F(0.0f), F(0.0f), F(0.0f)});
         return;

@@ -433,12 +433,23 @@ void JointSolver::beginRow(JointRow& r, const JointFrame& f, SolverBodies& rows,
     r.rA = rotate(rotationA, f.rA);
     r.rB = rotate(rotationB, f.rB);
     const Vec3 separation = f.centres + (displacementB - displacementA) + (r.rB - r.rA);
+    // Effective masses at this substep's anchors: a light body on a long lever turns its anchor far within a step,
+    // and the step's first masses would then push the wrong way (springs keep theirs: their softness is built on it).
     if (r.type == JointType::Distance || r.type == JointType::Spring) {
         const float len = length(separation);
         if (len > 1e-6f) r.axis = separation * (1.0f / len);  // else the last direction stands
         r.axialError = len - f.length;
+        if (r.type == JointType::Distance) {
+            const Vec3 ra = cross(r.rA, r.axis), rb = cross(r.rB, r.axis);
+            const float K = r.invMassA + r.invMassB + dot(ra, r.inertiaA * ra) + dot(rb, r.inertiaB * rb);
+            if (K > 0) r.axialMass = 1.0f / K;
+        }
     } else {
         r.pointError = separation;
+        JointSym3 k;
+        addPointMass(k, r.invMassA, r.inertiaA, r.rA);
+        addPointMass(k, r.invMassB, r.inertiaB, r.rB);
+        r.pointMass = inverse(k);
     }
     if (r.type == JointType::Hinge) {
         r.hingeAxis = rotate(rotationA, f.axisA);
