@@ -6,9 +6,9 @@
 // worker's scratch row. Empty lanes name the still row on both sides and carry zero masses: they compute a zero
 // impulse and write only the scratch row.
 //
-// The rows follow JointSolver's scalar ones: begin() measures the substep's anchors and error from the bodies' motion
-// since the step's start (exact rotations) and applies the accumulated impulse (warm starting) or clears it; solve()
-// is one sequential-impulse iteration of the three point rows with the step's softness.
+// The rows follow JointSolver's scalar ones: begin() measures the substep's anchors, error and effective mass from the
+// bodies' motion since the step's start (exact rotations) and applies the accumulated impulse (warm starting) or
+// clears it; solve() is one sequential-impulse iteration of the three point rows with the step's softness.
 #include <cstddef>
 #include <cstdint>
 

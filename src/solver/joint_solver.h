@@ -5,9 +5,10 @@
 // touches.
 //
 // Rows are built once per step, like the contacts' (Catto, "Solver2D", 2024): anchors, axes and effective masses at
-// the step's start. Each substep measures the joints' errors again from the bodies' motion since then (the body
-// rows' `motion`, exact rotations) and keeps the effective masses, so a substep costs the joints one light pass
-// before their iterations, not a rebuild from the body store.
+// the step's start. Each substep measures the joints' anchors and errors again from the bodies' motion since then
+// (the body rows' `motion`, exact rotations) and the point rows' effective mass at those anchors (a light body on a
+// long lever turns its anchor far within a step: a cloth of small spheres went non-finite on the step's first
+// masses), so a substep costs the joints one light pass before their iterations, not a rebuild from the body store.
 //
 // Joints run within their island's segment of the contact solve (ContactSolver::segmentOfIsland): a block of small
 // islands solves its joints serially in its own task. The large islands' joints run before their contact colours,
