@@ -115,12 +115,10 @@ void addPointMass(simd::SymMat3W<F>& k, const MassW<F>& mass, const Vec3W<F>& r)
     k.xy += cy.x, k.xz += cz.x, k.yz += cz.y;
 }
 
+/// The step's frames of a batch whose body rows are set, from its lanes' poses (the effective masses follow the
+/// anchors: begin()).
 template <class F>
-void storePointMass(BallJointBatch& b, const MassRow* mass, const Vec3W<F>& rA, const Vec3W<F>& rB);
-
-/// The step's frames and effective masses of a batch whose body rows are set, from its lanes' poses.
-template <class F>
-RUBBLE_FLATTEN void build(BallJointBatch& b, const BallJointPoses& p, const MassRow* mass) {
+RUBBLE_FLATTEN void build(BallJointBatch& b, const BallJointPoses& p) {
     Vec3W<F> r[2], centre[2];
     for (int side = 0; side < 2; ++side) {
         const simd::QuatW<F> q = simd::QuatW<F>::load(p.qx[side], p.qy[side], p.qz[side], p.qw[side], 0);
@@ -130,16 +128,15 @@ RUBBLE_FLATTEN void build(BallJointBatch& b, const BallJointPoses& p, const Mass
     put3(b.frameAx, b.frameAy, b.frameAz, 0, r[0]);
     put3(b.frameBx, b.frameBy, b.frameBz, 0, r[1]);
     put3(b.centresX, b.centresY, b.centresZ, 0, centre[1] - centre[0]);
-    storePointMass(b, mass, r[0], r[1]);
 }
 
-/// The inverse of the point rows' effective mass at the anchors rA, rB into the batch.
+/// The inverse of the point rows' effective mass at the anchors rA, rB into the batch's lanes from `lane`.
 template <class F>
-void storePointMass(BallJointBatch& b, const MassRow* mass, const Vec3W<F>& rA, const Vec3W<F>& rB) {
+void storePointMass(BallJointBatch& b, std::size_t lane, const MassRow* mass, const Vec3W<F>& rA, const Vec3W<F>& rB) {
     const F zero(0.0f);
     simd::SymMat3W<F> k{zero, zero, zero, zero, zero, zero};
-    addPointMass(k, loadMasses<F>(mass, b.bodyA), rA);
-    addPointMass(k, loadMasses<F>(mass, b.bodyB), rB);
+    addPointMass(k, loadMasses<F>(mass, b.bodyA + lane), rA);
+    addPointMass(k, loadMasses<F>(mass, b.bodyB + lane), rB);
     // Its inverse by cofactors; zero where K is singular (no mass on either side: an empty lane).
     const F c00 = k.yy * k.zz - k.yz * k.yz;
     const F c01 = k.xz * k.yz - k.xy * k.zz;
@@ -149,7 +146,7 @@ void storePointMass(BallJointBatch& b, const MassRow* mass, const Vec3W<F>& rA, 
     const F inv = F(1.0f) / simd::select(positive, det, F(1.0f));
     const F entries[6] = {c00 * inv, (k.xx * k.zz - k.xz * k.xz) * inv, (k.xx * k.yy - k.xy * k.xy) * inv, c01 * inv,
                           c02 * inv, (k.xy * k.xz - k.xx * k.yz) * inv};
-    for (int e = 0; e < 6; ++e) simd::store(b.pointMass[e], simd::select(positive, entries[e], zero));
+    for (int e = 0; e < 6; ++e) simd::store(b.pointMass[e] + lane, simd::select(positive, entries[e], zero));
 }
 
 template <class F>
@@ -165,7 +162,7 @@ RUBBLE_FLATTEN void begin(BallJointBatch& b, std::size_t lane, const BodyRows& r
     put3(b.errorX, b.errorY, b.errorZ, lane, error);
     // The effective mass at this substep's anchors: a light body on a long lever (a cloth of small spheres) turns its
     // anchor far within a step, and the step's first K would then push the wrong way.
-    storePointMass<F>(b, rows.mass, rA, rB);
+    storePointMass<F>(b, lane, rows.mass, rA, rB);
     if (!warm) {
         put3(b.impulseX, b.impulseY, b.impulseZ, lane, Vec3W<F>{F(0.0f), F(0.0f), F(0.0f)});
         return;

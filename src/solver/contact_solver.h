@@ -85,7 +85,8 @@ struct JointCoupling {
     std::vector<std::uint64_t> noContactPairs;
     std::uint64_t pairsVersion = 0;  ///< JointStore::pairsVersion() noContactPairs were listed at
 
-    /// The joints' edges for the island builder: pairs of moving bodies, in store order (JointStore::appendEdges).
+    /// The joint graph for the island builder: one (dense index, dense index) pair per unbroken joint whose two
+    /// bodies both move, in store order. Joints to static bodies tie nothing together.
     void appendEdges(std::vector<std::pair<std::uint32_t, std::uint32_t>>& edges) const {
         for (std::size_t i = 0; i + 1 < bodies.size(); i += 2)
             if (bodies[i] != kNoCoupledBody && bodies[i + 1] != kNoCoupledBody)

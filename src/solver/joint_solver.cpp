@@ -171,12 +171,19 @@ Side sideOf(const BodyStorage& storage, const ContactSolver& contacts, BodyId id
     return s;
 }
 
-/// Inverse of the point rows' effective mass: how an impulse at the anchors changes their relative velocity.
-JointSym3 pointMass(const Side& A, const Side& B) {
+/// Inverse of the point rows' effective mass at the row's anchors: how an impulse there changes their relative
+/// velocity.
+JointSym3 pointMassOf(const JointRow& r) {
     JointSym3 k;
-    addPointMass(k, A.invMass, A.inertia, A.r);
-    addPointMass(k, B.invMass, B.inertia, B.r);
+    addPointMass(k, r.invMassA, r.inertiaA, r.rA);
+    addPointMass(k, r.invMassB, r.inertiaB, r.rB);
     return inverse(k);
+}
+
+/// How an impulse along the row's axis at its anchors changes their relative speed along it.
+float axialK(const JointRow& r) {
+    const Vec3 ra = cross(r.rA, r.axis), rb = cross(r.rB, r.axis);
+    return r.invMassA + r.invMassB + dot(ra, r.inertiaA * ra) + dot(rb, r.inertiaB * rb);
 }
 
 }  // namespace
@@ -266,12 +273,8 @@ void JointSolver::prepare(const JointStore& store, const BodyStorage& storage, c
     // last step's.
     const auto sameLinks = [&] {
         if (segments != linkedSegments_ || links_.size() != lastLinks_.size()) return false;
-        for (std::size_t i = 0; i < links_.size(); ++i) {
-            const JointLink &a = links_[i], &b = lastLinks_[i];
-            if (a.rowA != b.rowA || a.rowB != b.rowB || a.segment != b.segment || a.dynamicA != b.dynamicA ||
-                a.dynamicB != b.dynamicB || a.ball != b.ball)
-                return false;
-        }
+        for (std::size_t i = 0; i < links_.size(); ++i)
+            if (!links_[i].sameBodies(lastLinks_[i])) return false;
         return true;
     };
     if (sameLinks()) {
@@ -319,19 +322,19 @@ void JointSolver::buildRow(std::uint32_t i, const BuildInputs& in) {
         const float len = length(separation);
         if (!(len > 1e-6f)) return;  // coincident anchors: no line to act along (only a spring's rest)
         r.axis = separation * (1.0f / len);
-        const Vec3 ra = cross(r.rA, r.axis), rb = cross(r.rB, r.axis);
-        const float K = r.invMassA + r.invMassB + dot(ra, r.inertiaA * ra) + dot(rb, r.inertiaB * rb);
-        if (!(K > 0)) return;
-        r.axialMass = 1.0f / K;
         f.length = j.length;
         if (j.type == JointType::Spring) {
+            // A spring's softness is built on its effective mass: taken once, here (a distance joint's follows the
+            // anchors, in beginRow()).
+            const float K = axialK(r);
+            if (!(K > 0)) return;
             if (!(j.damping + h * j.stiffness > 0)) return;  // neither stiffness nor damping: no force
+            r.axialMass = 1.0f / K;
             softness = spring(j.stiffness, j.damping, K, h);
         }
         if (warm) r.axialImpulse = dot(j.linearImpulse, r.axis);
-    } else {
-        r.pointMass = pointMass(A, B);
-        if (warm) r.linearImpulse = j.linearImpulse;
+    } else if (warm) {
+        r.linearImpulse = j.linearImpulse;
     }
 
     if (j.type == JointType::Hinge) {
@@ -414,7 +417,7 @@ void JointSolver::buildBatch(BallJointBatch& b, std::uint32_t first, std::uint32
             (side == 0 ? b.bodyA : b.bodyB)[lane] = row >= 0 ? row : stillRow;
         }
     }
-    ball_joint_kernels::build<simd::FloatW>(b, poses, in.contacts.bodies().mass.data());
+    ball_joint_kernels::build<simd::FloatW>(b, poses);
 }
 
 void JointSolver::beginRow(JointRow& r, const JointFrame& f, SolverBodies& rows, bool warm) const {
@@ -440,16 +443,12 @@ void JointSolver::beginRow(JointRow& r, const JointFrame& f, SolverBodies& rows,
         if (len > 1e-6f) r.axis = separation * (1.0f / len);  // else the last direction stands
         r.axialError = len - f.length;
         if (r.type == JointType::Distance) {
-            const Vec3 ra = cross(r.rA, r.axis), rb = cross(r.rB, r.axis);
-            const float K = r.invMassA + r.invMassB + dot(ra, r.inertiaA * ra) + dot(rb, r.inertiaB * rb);
+            const float K = axialK(r);
             if (K > 0) r.axialMass = 1.0f / K;
         }
     } else {
         r.pointError = separation;
-        JointSym3 k;
-        addPointMass(k, r.invMassA, r.inertiaA, r.rA);
-        addPointMass(k, r.invMassB, r.inertiaB, r.rB);
-        r.pointMass = inverse(k);
+        r.pointMass = pointMassOf(r);
     }
     if (r.type == JointType::Hinge) {
         r.hingeAxis = rotate(rotationA, f.axisA);
@@ -695,13 +694,13 @@ void JointSolver::colourLarge(const ContactSolver& contacts, const MovingBodies&
     for (std::uint32_t i = 0; i < count; ++i) ++sizes[groupOf(links_[segmentRows_[begin + i]])];
     const bool slabs = sizes[2] <= count / kMaxCrossingShare && std::min(sizes[0], sizes[1]) >= count / 4;
     // Each group in store order, one after the other: slab 0, slab 1, the crossing joints; or all as one.
-    colourScratch_.resize(count);
+    orderScratch_.resize(count);
     std::uint32_t fill[3] = {0, sizes[0], sizes[0] + sizes[1]};
     for (std::uint32_t i = 0; i < count; ++i) {
         const std::uint32_t row = segmentRows_[begin + i];
-        colourScratch_[slabs ? fill[groupOf(links_[row])]++ : i] = row;
+        orderScratch_[slabs ? fill[groupOf(links_[row])]++ : i] = row;
     }
-    std::copy(colourScratch_.begin(), colourScratch_.end(), segmentRows_.begin() + begin);
+    std::copy(orderScratch_.begin(), orderScratch_.end(), segmentRows_.begin() + begin);
     std::uint32_t batchCount = 0;
     if (slabs) {
         colourGroup(contacts, begin, sizes[0], batchCount);
@@ -762,14 +761,14 @@ void JointSolver::colourGroup(const ContactSolver& contacts, std::uint32_t begin
         batchedJoints_ += balls[c];
         colours_.push_back(colour);
     }
-    groupScratch_.resize(count);
+    orderScratch_.resize(count);
     for (std::uint32_t i = 0; i < count; ++i) {
         const std::uint32_t row = segmentRows_[begin + i], colour = colourOf_[i];
         JointLink& l = links_[row];
         l.batched = batched(l, colour);
-        groupScratch_[l.batched ? ballFill[colour]++ : otherFill[colour]++] = row;
+        orderScratch_[l.batched ? ballFill[colour]++ : otherFill[colour]++] = row;
     }
-    std::copy(groupScratch_.begin(), groupScratch_.end(), segmentRows_.begin() + begin);
+    std::copy(orderScratch_.begin(), orderScratch_.end(), segmentRows_.begin() + begin);
     groups_.back().colourCount = static_cast<std::uint32_t>(colours_.size()) - groups_.back().firstColour;
 }
 

@@ -140,6 +140,11 @@ private:
         std::int32_t rowA = -1, rowB = -1;
         std::uint32_t segment = kInactive;
         bool dynamicA = false, dynamicB = false, ball = false, batched = false;
+        /// The same bodies and segment (batched is the layout's, not the joint's).
+        bool sameBodies(const JointLink& o) const {
+            return rowA == o.rowA && rowB == o.rowB && segment == o.segment && dynamicA == o.dynamicA &&
+                   dynamicB == o.dynamicB && ball == o.ball;
+        }
     };
     struct BuildInputs {
         const JointStore& store;
@@ -191,7 +196,6 @@ private:
     };
     std::vector<Group> groups_;
     std::vector<float> slabKeys_;
-    std::vector<std::uint32_t> groupScratch_;
     AlignedVector<BallJointBatch> batches_;
     /// Batch k's lanes are joints segmentRows_[first, first + count).
     struct BatchJoints {
@@ -199,10 +203,10 @@ private:
     };
     std::vector<BatchJoints> batchJoints_;
     std::uint32_t batchedJoints_ = 0;
-    BallJointSoftness rigid_;                 ///< the step's softness of rigid rows
-    std::vector<std::uint64_t> bodyColours_;  ///< colouring scratch, by body row
-    std::vector<std::uint8_t> colourOf_;      ///< colouring scratch, by joint of the large segment
-    std::vector<std::uint32_t> colourScratch_;
+    BallJointSoftness rigid_;                  ///< the step's softness of rigid rows
+    std::vector<std::uint64_t> bodyColours_;   ///< colouring scratch, by body row
+    std::vector<std::uint8_t> colourOf_;       ///< colouring scratch, by joint of the large segment
+    std::vector<std::uint32_t> orderScratch_;  ///< a range of segmentRows_ being reordered
     float h_ = 0;
 };
 

@@ -72,14 +72,4 @@ void JointStore::markBroken(std::uint32_t dense) {
     brokenReports_.push_back(idOf(dense));
 }
 
-void JointStore::appendEdges(const BodyStorage& bodies,
-                             std::vector<std::pair<std::uint32_t, std::uint32_t>>& edges) const {
-    for (const Joint& j : joints_) {
-        if (j.broken) continue;
-        const BodySlot* a = bodies.find(j.bodyA);
-        const BodySlot* b = bodies.find(j.bodyB);
-        if (a && b && a->set == BodySet::Moving && b->set == BodySet::Moving) edges.emplace_back(a->dense, b->dense);
-    }
-}
-
 }  // namespace rubble::detail

@@ -6,7 +6,6 @@
 // Joints name their bodies by BodyId, not by dense index: a moving body's dense index changes when another body is
 // removed (swap-remove), so the solver resolves the handles to rows when it prepares a step.
 #include <cstdint>
-#include <utility>
 #include <vector>
 
 #include "rubble/id.h"
@@ -69,10 +68,6 @@ public:
     /// Marks a joint broken and queues its report.
     void markBroken(std::uint32_t dense);
     std::vector<JointId>& brokenReports() { return brokenReports_; }
-
-    /// The joint graph for the island builder: one (dense index, dense index) pair of moving bodies per unbroken
-    /// joint whose two bodies both move, in joint order. Joints to static bodies tie nothing together.
-    void appendEdges(const BodyStorage& bodies, std::vector<std::pair<std::uint32_t, std::uint32_t>>& edges) const;
 
 private:
     void unlink(std::uint32_t bodySlot, std::uint32_t jointSlot);

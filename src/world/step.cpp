@@ -71,13 +71,18 @@ void buildIslands(World::Impl& w, StepContext& step) {
     {
         const auto timer = step.time(Stage::Islands);
         w.islandEdges.clear();
-        if (step.joints) {
-            // The joints' bodies, for the islands now and the solver's rows after.
-            detail::JointTimer jointTimer(step.profile);
-            w.jointSolver.couple(w.joints, w.bodies, w.jointCoupling, step.pool);
+        if (step.joints || w.joints.size() > 0) {
+            // The joints' bodies, for the islands now and the solver's rows after (listed again when the last joint
+            // is gone, or its pair would still not collide). Joints hold their islands together even when they do
+            // not act (Effect::Joints off): the bodies sleep and wake as one.
+            const auto couple = [&] { w.jointSolver.couple(w.joints, w.bodies, w.jointCoupling, step.pool); };
+            if (step.joints) {
+                detail::JointTimer jointTimer(step.profile);
+                couple();
+            } else {
+                couple();
+            }
             w.jointCoupling.appendEdges(w.islandEdges);
-        } else {
-            w.joints.appendEdges(w.bodies, w.islandEdges);
         }
         w.sleeping.linkSleepingIslands(w.bodies, w.islandEdges);
         w.islandBuilder.build(w.contacts, w.islandEdges, w.bodies.moving, step.pool, w.islands);
