@@ -47,8 +47,10 @@ struct HullView {
     int edgeCount;
     const std::vector<float>* arcs;        ///< HullAdjacency::arcs
     const std::vector<float>* normalRows;  ///< HullAdjacency::normalRows
+    const std::vector<float>* arcCones;    ///< HullAdjacency::arcCones
     Vec3 interior;
     float size;
+    float inradius;
 };
 
 HullView viewOf(const ConvexHull& h, const HullAdjacency& adj) {
@@ -63,8 +65,10 @@ HullView viewOf(const ConvexHull& h, const HullAdjacency& adj) {
             static_cast<int>(adj.edges.size()),
             adj.arcs,
             adj.normalRows,
+            adj.arcCones,
             adj.interior,
-            adj.size};
+            adj.size,
+            adj.inradius};
 }
 
 // ---- The unit cube, numbered like box_box.h: vertex i has sign bits x = bit 0, y = bit 1, z = bit 2 (set = +);
@@ -111,6 +115,7 @@ HullView boxView(Vec3 half, Vec3 (&vertices)[8], float (&offsets)[6]) {
     v.vertices = vertices;
     v.offsets = offsets;
     v.size = length(half);
+    v.inradius = minf(half.x, minf(half.y, half.z));
     return v;
 }
 
@@ -119,8 +124,10 @@ std::size_t paddedRow(std::size_t n) { return (n + kHullArcPadding - 1) / kHullA
 
 /// Thread-local scratch (grown, never shrunk), so the kernels do not allocate in steady state.
 struct Scratch {
-    std::vector<Vec3> vertices, normals, edgeDir, edgeCross;
+    std::vector<Vec3> vertices, normals;
     std::vector<float> offsets, normalRows[3];
+    std::vector<std::uint32_t> edgesA, edgesB;  ///< the edges whose arcs reach the cone of possible axes
+    std::vector<float> arcsA[9];                ///< HullAdjacency::arcs of edgesA, packed
     HullAdjacency adjA, adjB;
 };
 Scratch& scratch() {
@@ -207,6 +214,25 @@ void lowestAlongFaces(const float* const rows[3], int f0, const Vec3* vertices, 
     simd::store(lowest, lo);
 }
 
+/// Appends to `out`, in ascending order, the edges whose arcs come within the cone {n : n . u > coneCos} (u a unit
+/// direction in the hull's frame): the arc lies within half its angle h of its midpoint m, so it reaches the cone
+/// unless angle(u, m) - h exceeds the cone's angle.
+void edgesNearCone(const std::vector<float>* cones, int edgeCount, Vec3 u, float coneCos,
+                   std::vector<std::uint32_t>& out) {
+    using simd::FloatW;
+    out.clear();
+    const FloatW ux(u.x), uy(u.y), uz(u.z), threshold(coneCos), zero(0.0f), one(1.0f);
+    alignas(64) bool near[simd::kLanes];
+    for (int e0 = 0; e0 < edgeCount; e0 += static_cast<int>(simd::kLanes)) {
+        const auto row = [&](int k) { return simd::load<FloatW>(cones[k].data() + e0); };
+        const FloatW c = row(0) * ux + row(1) * uy + row(2) * uz, cosH = row(3), sinH = row(4);
+        const FloatW sinAngle = simd::sqrt(simd::max(one - c * c, zero));
+        simd::storeMask(near, (c >= cosH) | (c * cosH + sinAngle * sinH > threshold));
+        for (int k = 0; k < static_cast<int>(simd::kLanes) && e0 + k < edgeCount; ++k)
+            if (near[k]) out.push_back(static_cast<std::uint32_t>(e0 + k));
+    }
+}
+
 /// Hull-hull kernel. B is brought into A's frame (relative to A's centre); all tests run there.
 bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView& B, const Transform& poseB,
                       float margin, Manifold& out, SatHint* hint) {
@@ -219,10 +245,6 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     if (sc.normals.size() < static_cast<std::size_t>(B.faceCount)) {
         sc.normals.resize(B.faceCount);
         sc.offsets.resize(B.faceCount);
-    }
-    if (sc.edgeDir.size() < static_cast<std::size_t>(B.edgeCount)) {
-        sc.edgeDir.resize(B.edgeCount);
-        sc.edgeCross.resize(B.edgeCount);
     }
     Vec3* vb = sc.vertices.data();
     Vec3* nb = sc.normals.data();
@@ -307,30 +329,48 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     // Edge pairs whose Gauss-map arcs cross (Gregorius' IsMinkowskiFace, with B's normals negated for the
     // Minkowski difference A - B). Only a separation above `limit` matters: it separates or beats the face axis.
     const float limit = minf(margin, sepFace + kBoxAxisRelativeTolerance * std::fabs(sepFace) + absTol);
-    for (int j = 0; j < B.edgeCount; ++j) {
-        const HullEdge& e = B.edges[j];
-        sc.edgeDir[j] = vb[e.v1] - vb[e.v0];
-        sc.edgeCross[j] = cross(nb[e.face1], nb[e.face0]);  // (-n1) x (-n0)
+    // Such a pair's axis n is on both arcs (A's, and B's negated) and, the hulls holding balls of their inradii
+    // around their interiors, n . d > limit + inradiusA + inradiusB with d the line between the interiors: only the
+    // edges whose arcs reach that cone around d (B's: around -d) are paired. The slack keeps every pair that rounding
+    // could lift above the limit, so the answer is the one of all pairs, bit for bit.
+    const Vec3 between = (r * B.interior + t) - A.interior;
+    const float distance = length(between);
+    const float slack = 1e-3f * (A.size + B.size);
+    float coneCos = -2;  // every edge
+    if (distance > 0 && A.inradius > 0 && B.inradius > 0)
+        coneCos = (limit + A.inradius + B.inradius - slack) / distance;
+    const Vec3 towardB = distance > 0 ? between / distance : Vec3{1, 0, 0};
+    // r^T (-towardB): the cone's axis for B's negated normals, in B's own frame.
+    const Vec3 uInB = -(towardB.x * r.row[0] + towardB.y * r.row[1] + towardB.z * r.row[2]);
+    edgesNearCone(A.arcCones, A.edgeCount, towardB, coneCos, sc.edgesA);
+    edgesNearCone(B.arcCones, B.edgeCount, uInB, coneCos, sc.edgesB);
+    const int countA = static_cast<int>(sc.edgesA.size());
+    for (std::vector<float>& row : sc.arcsA)
+        if (row.size() < paddedRow(countA)) row.resize(paddedRow(countA));
+    for (int k = 0; k < 9; ++k) {
+        float* packed = sc.arcsA[k].data();
+        for (int i = 0; i < countA; ++i) packed[i] = A.arcs[k][sc.edgesA[i]];
+        for (int i = countA; i < static_cast<int>(paddedRow(countA)); ++i) packed[i] = 0;  // fails the sign tests
     }
-    const Vec3* eDirB = sc.edgeDir.data();
-    const Vec3* eCrossB = sc.edgeCross.data();
     // Each of B's edges against all of A's at once, A's in SIMD lanes: the three sign tests of the Minkowski-face test
     // branch-free over A's arcs (most pairs fail them), and only the lanes that pass go on, one at a time, through
     // edgePairCandidate, which repeats the tests with the same arithmetic and finds the axis. The best pair is the
     // one a scan over A's edges, then B's, would keep first: the largest separation, ties to the lowest (i, j).
     using simd::FloatW;
     const float* arcs[9];
-    for (int k = 0; k < 9; ++k) arcs[k] = A.arcs[k].data();
+    for (int k = 0; k < 9; ++k) arcs[k] = sc.arcsA[k].data();
     float sepE = -INFINITY;
     int edgeA = -1, edgeB = -1;
     Vec3 axisE{};
     alignas(64) bool skip[simd::kLanes];
-    for (int j = 0; j < B.edgeCount; ++j) {
+    for (const std::uint32_t jb : sc.edgesB) {
+        const int j = static_cast<int>(jb);
         const HullEdge& eb = B.edges[j];
-        const Vec3 n0 = nb[eb.face0], n1 = nb[eb.face1], c = eCrossB[j];
+        const Vec3 n0 = nb[eb.face0], n1 = nb[eb.face1], c = cross(n1, n0);  // (-n1) x (-n0)
+        const Vec3 dirB = vb[eb.v1] - vb[eb.v0];
         const FloatW n0x(n0.x), n0y(n0.y), n0z(n0.z), n1x(n1.x), n1y(n1.y), n1z(n1.z), cx(c.x), cy(c.y), cz(c.z);
         const FloatW zero(0.0f);
-        for (int i0 = 0; i0 < A.edgeCount; i0 += static_cast<int>(simd::kLanes)) {
+        for (int i0 = 0; i0 < countA; i0 += static_cast<int>(simd::kLanes)) {
             const auto row = [&](int k) { return simd::load<FloatW>(arcs[k] + i0); };
             const FloatW bxaX = row(6), bxaY = row(7), bxaZ = row(8);
             const FloatW cba = -(n0x * bxaX + n0y * bxaY + n0z * bxaZ);
@@ -340,14 +380,14 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
             const simd::MaskW fail = (cba * dba >= zero) | (adc * bdc >= zero) | (cba * bdc <= zero);
             if (simd::all(fail)) continue;
             simd::storeMask(skip, fail);
-            for (int k = 0; k < static_cast<int>(simd::kLanes) && i0 + k < A.edgeCount; ++k) {
+            for (int k = 0; k < static_cast<int>(simd::kLanes) && i0 + k < countA; ++k) {
                 if (skip[k]) continue;
-                const int i = i0 + k;
+                const int i = static_cast<int>(sc.edgesA[static_cast<std::size_t>(i0 + k)]);
                 const EdgeOfA ea = edgeOfA(A, i);
                 Vec3 axis;
                 float len2, num;
-                if (!edgePairCandidate(ea, vb[eb.v0], eDirB[j], c, -dot(n0, ea.bxa), -dot(n1, ea.bxa), limit, axis,
-                                       len2, num))
+                if (!edgePairCandidate(ea, vb[eb.v0], dirB, c, -dot(n0, ea.bxa), -dot(n1, ea.bxa), limit, axis, len2,
+                                       num))
                     continue;
                 const float sep = num / std::sqrt(len2);
                 if (sep > margin) return separatedBy(SatHint::kEdges, i, j);
@@ -361,7 +401,7 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     if (edgeA >= 0 && clearlyBetter(sepE, sepFace)) {
         const HullEdge& ea = A.edges[edgeA];
         const HullEdge& eb = B.edges[edgeB];
-        const Vec3 pa = va[ea.v0], da = va[ea.v1] - pa, pb = vb[eb.v0], db = eDirB[edgeB];
+        const Vec3 pa = va[ea.v0], da = va[ea.v1] - pa, pb = vb[eb.v0], db = vb[eb.v1] - pb;
         float s, w;
         closestSegmentPoints(pa, da, pb, db, s, w);
         const Vec3 ca = pa + da * s, cb = pb + db * w;
@@ -811,6 +851,22 @@ HullAdjacency buildHullAdjacency(const ConvexHull& hull) {
         const float values[9] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z};
         for (int r = 0; r < 9; ++r) adj.arcs[r][e] = values[r];
     }
+    for (std::vector<float>& row : adj.arcCones) row.assign(paddedRow(adj.edges.size()), 0.0f);
+    for (std::size_t e = 0; e < adj.edges.size(); ++e) {
+        const Vec3 a = hull.faceNormals[adj.edges[e].face0], b = hull.faceNormals[adj.edges[e].face1];
+        const float half = 0.5f * std::acos(std::fmax(-1.0f, std::fmin(1.0f, dot(a, b))));
+        const Vec3 sum2 = a + b;
+        const float len = length(sum2);
+        // Opposite normals (only on degenerate hulls): no midpoint, and a cone of the whole sphere.
+        const Vec3 mid = len > 1e-6f ? sum2 / len : Vec3{1, 0, 0};
+        const float values[5] = {mid.x, mid.y, mid.z, len > 1e-6f ? std::cos(half) : -1.0f,
+                                 len > 1e-6f ? std::sin(half) : 0.0f};
+        for (int r = 0; r < 5; ++r) adj.arcCones[r][e] = values[r];
+    }
+    adj.inradius = faces > 0 ? INFINITY : 0.0f;
+    for (std::uint32_t f = 0; f < faces; ++f)
+        adj.inradius = minf(adj.inradius, hull.faceOffsets[f] - dot(hull.faceNormals[f], adj.interior));
+    adj.inradius = maxf(adj.inradius, 0.0f);
     return adj;
 }
 

@@ -91,6 +91,14 @@ struct HullAdjacency {
     std::vector<float> arcs[9];
     /// The face normals in SoA rows x y z, padded like the arcs: the SAT's face tests take several faces at a time.
     std::vector<float> normalRows[3];
+    /// The radius of a ball around `interior` that lies inside the hull (the nearest face plane's distance). Along
+    /// a unit axis n two hulls are apart by at most n . (interiorB - interiorA) - inradiusA - inradiusB, so only axes
+    /// near the line between the interiors can separate them by much: the SAT tests only the edge pairs whose arcs
+    /// reach that cone (zero, or less, tests them all).
+    float inradius = 0;
+    /// Per edge, a cone around its arc on the Gauss map: the unit midpoint of its two face normals (rows x y z) and
+    /// the cosine and sine of half the angle between them (rows 3 and 4), in SoA rows padded like the arcs.
+    std::vector<float> arcCones[5];
 };
 /// The widest SIMD batch of any build of the core (AVX-512, 16 floats): the arcs are padded for every level.
 inline constexpr std::size_t kHullArcPadding = 16;

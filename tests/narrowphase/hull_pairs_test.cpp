@@ -389,6 +389,43 @@ TEST(HullPairs, SatHintNeverChangesTheAnswer) {
     EXPECT_GT(answeredByHint, separated / 2);
 }
 
+// The edge pairs are paired only where their arcs reach the cone of axes that could separate the hulls by more
+// than the search's limit (HullAdjacency::inradius). An inradius of zero turns that off: the manifolds must be the
+// same bit for bit with and without it, over poses from deep overlap to apart, hull-hull and box-hull, and among
+// them many that an edge pair decides.
+TEST(HullPairs, EdgeConeNeverChangesTheAnswer) {
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<float> u(-1, 1), frac(0, 1);
+    int touching = 0, edgeContacts = 0;
+    for (int it = 0; it < 400; ++it) {
+        const ConvexHull a = randomHull(rng, 8 + it % 40, 1.0f), b = randomHull(rng, 6 + it % 30, 0.7f);
+        const HullAdjacency adjA = buildHullAdjacency(a), adjB = buildHullAdjacency(b);
+        HullAdjacency allA = adjA, allB = adjB;
+        allA.inradius = allB.inradius = 0;
+        ASSERT_GT(adjA.inradius, 0.0f) << it;
+        Vec3 dir{u(rng), u(rng), u(rng)};
+        dir = dir / std::fmax(length(dir), 1e-3f);
+        const Transform pa{{0.3f * u(rng), 0, 0}, randomRotation(rng)};
+        const Transform pb{pa.position + dir * ((0.1f + 0.9f * frac(rng)) * (hullSize(a) + hullSize(b))),
+                           randomRotation(rng)};
+        const float margin = it % 2 ? 0.02f : 0.1f;
+        Manifold culled, all;
+        const bool hit = collideHulls(a, adjA, pa, b, adjB, pb, margin, culled);
+        ASSERT_EQ(hit, collideHulls(a, allA, pa, b, allB, pb, margin, all)) << it;
+        expectSameManifold(all, culled, "hull-hull", it);
+        touching += hit;
+        edgeContacts += hit && culled.points[0].feature >> 30 == 2;
+        const Vec3 half{0.2f + frac(rng), 0.2f + frac(rng), 0.2f + frac(rng)};
+        const bool boxHit = collideBoxHull(pa, half, b, adjB, pb, margin, culled);
+        ASSERT_EQ(boxHit, collideBoxHull(pa, half, b, allB, pb, margin, all)) << it;
+        expectSameManifold(all, culled, "box-hull", it);
+        touching += boxHit;
+        edgeContacts += boxHit && culled.points[0].feature >> 30 == 2;
+    }
+    EXPECT_GT(touching, 300);
+    EXPECT_GT(edgeContacts, 40);
+}
+
 TEST(HullPairs, SpeculativeMargin) {
     const ConvexHull cube = boxHull({0.5f, 0.5f, 0.5f});
     const Transform ground{{0, 0, 0}, {}};
