@@ -2,6 +2,11 @@
 // reference-face clipping and reduction to four points; GJK on the cores for capsules. See hull_pairs.h.
 #include "narrowphase/hull_pairs.h"
 
+// GCC's SLP vectoriser may fuse alternating +/- lanes (the rotation matrix of a quaternion) into vfmsubadd even under
+// -ffp-contract=off, and whether it does depends on what got inlined where: the kernel's results would then change
+// with unrelated edits and differ between the build levels. Its wide loops are explicit SIMD.
+#pragma GCC optimize("no-tree-slp-vectorize")
+
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -48,6 +53,8 @@ struct HullView {
     const std::vector<float>* arcs;        ///< HullAdjacency::arcs
     const std::vector<float>* normalRows;  ///< HullAdjacency::normalRows
     const std::vector<float>* arcCones;    ///< HullAdjacency::arcCones
+    const std::uint32_t* vertexFaceStart;  ///< HullAdjacency::vertexFaceStart
+    const std::uint32_t* vertexFaces;
     Vec3 interior;
     float size;
     float inradius;
@@ -66,6 +73,8 @@ HullView viewOf(const ConvexHull& h, const HullAdjacency& adj) {
             adj.arcs,
             adj.normalRows,
             adj.arcCones,
+            adj.vertexFaceStart.data(),
+            adj.vertexFaces.data(),
             adj.interior,
             adj.size,
             adj.inradius};
@@ -124,10 +133,10 @@ std::size_t paddedRow(std::size_t n) { return (n + kHullArcPadding - 1) / kHullA
 
 /// Thread-local scratch (grown, never shrunk), so the kernels do not allocate in steady state.
 struct Scratch {
-    std::vector<Vec3> vertices, normals;
-    std::vector<float> offsets, normalRows[3];
-    std::vector<std::uint32_t> edgesA, edgesB;  ///< the edges whose arcs reach the cone of possible axes
-    std::vector<float> arcsA[9];                ///< HullAdjacency::arcs of edgesA, packed
+    std::vector<Vec3> vertices;
+    std::vector<std::uint32_t> faces, everyFace;  ///< faces in the cone of possible axes; 0, 1, 2, ...
+    std::vector<std::uint32_t> edgesA, edgesB;    ///< the edges whose arcs reach the cone of possible axes
+    std::vector<float> arcsA[9];                  ///< HullAdjacency::arcs of edgesA, packed
     HullAdjacency adjA, adjB;
 };
 Scratch& scratch() {
@@ -214,26 +223,54 @@ void lowestAlongFaces(const float* const rows[3], int f0, const Vec3* vertices, 
     simd::store(lowest, lo);
 }
 
-/// Appends to `out`, in ascending order, the edges whose arcs come within the cone {n : n . u > coneCos} (u a unit
-/// direction in the hull's frame): the arc lies within half its angle h of its midpoint m, so it reaches the cone
-/// unless angle(u, m) - h exceeds the cone's angle.
-void edgesNearCone(const std::vector<float>* cones, int edgeCount, Vec3 u, float coneCos,
-                   std::vector<std::uint32_t>& out) {
+/// Writes to `out`, in ascending order, the edges whose arcs come within the cone {n : n . u > coneCos} (u a unit
+/// direction in the hull's frame) and returns their count: the arc lies within half its angle h of its midpoint m,
+/// so it reaches the cone unless angle(u, m) - h exceeds the cone's angle. `out` holds edgeCount + kLanes.
+int edgesNearCone(const std::vector<float>* cones, int edgeCount, Vec3 u, float coneCos, std::uint32_t* out) {
     using simd::FloatW;
-    out.clear();
     const FloatW ux(u.x), uy(u.y), uz(u.z), threshold(coneCos), zero(0.0f), one(1.0f);
     alignas(64) bool near[simd::kLanes];
+    int count = 0;
     for (int e0 = 0; e0 < edgeCount; e0 += static_cast<int>(simd::kLanes)) {
         const auto row = [&](int k) { return simd::load<FloatW>(cones[k].data() + e0); };
         const FloatW c = row(0) * ux + row(1) * uy + row(2) * uz, cosH = row(3), sinH = row(4);
         const FloatW sinAngle = simd::sqrt(simd::max(one - c * c, zero));
         simd::storeMask(near, (c >= cosH) | (c * cosH + sinAngle * sinH > threshold));
-        for (int k = 0; k < static_cast<int>(simd::kLanes) && e0 + k < edgeCount; ++k)
-            if (near[k]) out.push_back(static_cast<std::uint32_t>(e0 + k));
+        const int lanes = std::min(static_cast<int>(simd::kLanes), edgeCount - e0);
+        for (int k = 0; k < lanes; ++k) {  // branch-free: the unpredictable test picks only the next slot
+            out[count] = static_cast<std::uint32_t>(e0 + k);
+            count += near[k];
+        }
     }
+    return count;
+}
+
+/// Writes to `out`, in ascending order, the faces whose normals lie in the cone {n : n . u > coneCos}, and returns
+/// their count. `out` holds faceCount + kLanes.
+int facesInCone(const std::vector<float>* normalRows, int faceCount, Vec3 u, float coneCos, std::uint32_t* out) {
+    using simd::FloatW;
+    const FloatW ux(u.x), uy(u.y), uz(u.z), threshold(coneCos);
+    alignas(64) bool inside[simd::kLanes];
+    int count = 0;
+    for (int f0 = 0; f0 < faceCount; f0 += static_cast<int>(simd::kLanes)) {
+        const auto row = [&](int k) { return simd::load<FloatW>(normalRows[k].data() + f0); };
+        simd::storeMask(inside, row(0) * ux + row(1) * uy + row(2) * uz > threshold);
+        const int lanes = std::min(static_cast<int>(simd::kLanes), faceCount - f0);
+        for (int k = 0; k < lanes; ++k) {
+            out[count] = static_cast<std::uint32_t>(f0 + k);
+            count += inside[k];
+        }
+    }
+    return count;
 }
 
 /// Hull-hull kernel. B is brought into A's frame (relative to A's centre); all tests run there.
+//
+// Every hull holds a ball of its inradius around its interior point, so along a unit axis n the hulls are apart by
+// at most n . d - inradiusA - inradiusB, d the line between the interiors: only axes in a cone around d can be
+// apart by more than a given floor. The face scans and the edge pairs test only the faces and edges that can reach
+// such a cone; a slack keeps every axis that rounding could lift over the floor, so the answer is that of the plain
+// search bit for bit (HullPairs.AxisConesNeverChangeTheAnswer).
 bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView& B, const Transform& poseB,
                       float margin, Manifold& out, SatHint* hint) {
     out.pointCount = 0;
@@ -242,40 +279,50 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     const Rot r = toRot(qInv * poseB.rotation);
     const Vec3 t = rotate(qInv, poseB.position - poseA.position);
     if (sc.vertices.size() < static_cast<std::size_t>(B.vertexCount)) sc.vertices.resize(B.vertexCount);
-    if (sc.normals.size() < static_cast<std::size_t>(B.faceCount)) {
-        sc.normals.resize(B.faceCount);
-        sc.offsets.resize(B.faceCount);
-    }
     Vec3* vb = sc.vertices.data();
-    Vec3* nb = sc.normals.data();
-    float* ob = sc.offsets.data();
     for (int i = 0; i < B.vertexCount; ++i) vb[i] = r * B.vertices[i] + t;
-    for (std::vector<float>& row : sc.normalRows)
-        if (row.size() < paddedRow(B.faceCount)) row.resize(paddedRow(B.faceCount));
-    for (int f = 0; f < B.faceCount; ++f) {
-        nb[f] = r * B.normals[f];
-        ob[f] = B.offsets[f] + dot(nb[f], t);
-        sc.normalRows[0][f] = nb[f].x, sc.normalRows[1][f] = nb[f].y, sc.normalRows[2][f] = nb[f].z;
-    }
     const Vec3* va = A.vertices;
-    // The face axes of one hull against the other's vertices, a batch of faces at a time in SIMD lanes: the
-    // separation along face f is the lowest vertex above its plane.
-    struct FaceSide {
-        const float* const* rows;
-        const float* offsets;
-        int faceCount;
-        const Vec3* vertices;  ///< the other hull's, in A's frame
-        int vertexCount;
+    // B's faces in A's frame, made when needed: most pairs need only a few.
+    const auto normalB = [&](int f) { return r * B.normals[f]; };
+    const auto planeB = [&](int f, Vec3& normal, float& offset) {
+        normal = normalB(f);
+        offset = B.offsets[f] + dot(normal, t);
     };
-    const float* rowsA[3] = {A.normalRows[0].data(), A.normalRows[1].data(), A.normalRows[2].data()};
-    const float* rowsB[3] = {sc.normalRows[0].data(), sc.normalRows[1].data(), sc.normalRows[2].data()};
-    const FaceSide facesA{rowsA, A.offsets, A.faceCount, vb, B.vertexCount};
-    const FaceSide facesB{rowsB, ob, B.faceCount, va, A.vertexCount};
+
+    const Vec3 between = (r * B.interior + t) - A.interior;
+    const float distance = length(between);
+    const bool bounded = distance > 0 && A.inradius > 0 && B.inradius > 0;
+    const float slack = 1e-3f * (A.size + B.size);
+    // The cosine of the cone (around towardB, for A's normals; around -towardB for B's) of the axes along which the
+    // hulls can be apart by more than `floor`; below -1 (every axis) without a bound.
+    const auto coneCos = [&](float floor) {
+        return bounded ? (floor + A.inradius + B.inradius - slack) / distance : -2.0f;
+    };
+    const Vec3 towardB = distance > 0 ? between / distance : Vec3{1, 0, 0};
+    // r^T (-towardB): the cone's axis for B's normals, in B's own frame.
+    const Vec3 towardAInB = -(towardB.x * r.row[0] + towardB.y * r.row[1] + towardB.z * r.row[2]);
+
+    // The face axes of one hull against the other's vertices, kLanes faces at a time in SIMD lanes: the separation
+    // along face f is the lowest vertex above its plane.
+    alignas(64) float lanes[3][simd::kLanes];
     alignas(64) float lowestOnFace[simd::kLanes];
-    const auto faceSeparation = [&](const FaceSide& side, int f) {
-        const int f0 = f - f % static_cast<int>(simd::kLanes);
-        lowestAlongFaces(side.rows, f0, side.vertices, side.vertexCount, lowestOnFace);
-        return lowestOnFace[f - f0] - side.offsets[f];
+    const float* laneRows[3] = {lanes[0], lanes[1], lanes[2]};
+    const auto separations = [&](bool ofB, const std::uint32_t* faces, int count, float* sep) {
+        float offsets[simd::kLanes];
+        for (int k = 0; k < static_cast<int>(simd::kLanes); ++k) {
+            Vec3 n{};
+            offsets[k] = 0;
+            if (k < count) {
+                const int f = static_cast<int>(faces[k]);
+                if (ofB)
+                    planeB(f, n, offsets[k]);
+                else
+                    n = A.normals[f], offsets[k] = A.offsets[f];
+            }
+            lanes[0][k] = n.x, lanes[1][k] = n.y, lanes[2][k] = n.z;
+        }
+        lowestAlongFaces(laneRows, 0, ofB ? va : vb, ofB ? A.vertexCount : B.vertexCount, lowestOnFace);
+        for (int k = 0; k < count; ++k) sep[k] = lowestOnFace[k] - offsets[k];
     };
     const auto separatedBy = [&](SatHint::Kind kind, int a, int b) {
         if (hint) *hint = {kind, true, static_cast<std::uint16_t>(a), static_cast<std::uint16_t>(b)};
@@ -285,39 +332,60 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     // Last call's separating axis first: one axis instead of the search, when the pair is still apart along it.
     if (hint && hint->separated) {
         const int a = hint->a, b = hint->b;
-        if (hint->kind == SatHint::kFaceA && a < A.faceCount && faceSeparation(facesA, a) > margin) return false;
-        if (hint->kind == SatHint::kFaceB && a < B.faceCount && faceSeparation(facesB, a) > margin) return false;
+        const std::uint32_t face = hint->a;
+        float sep = -INFINITY;
+        if (hint->kind == SatHint::kFaceA && a < A.faceCount) separations(false, &face, 1, &sep);
+        if (hint->kind == SatHint::kFaceB && a < B.faceCount) separations(true, &face, 1, &sep);
+        if (sep > margin) return false;
         if (hint->kind == SatHint::kEdges && a < A.edgeCount && b < B.edgeCount) {
             const EdgeOfA ea = edgeOfA(A, a);
             const HullEdge& eb = B.edges[b];
+            const Vec3 n0 = normalB(static_cast<int>(eb.face0)), n1 = normalB(static_cast<int>(eb.face1));
             Vec3 axis;
             float len2, num;
-            if (edgePairCandidate(ea, vb[eb.v0], vb[eb.v1] - vb[eb.v0], cross(nb[eb.face1], nb[eb.face0]),
-                                  -dot(nb[eb.face0], ea.bxa), -dot(nb[eb.face1], ea.bxa), margin, axis, len2, num) &&
+            if (edgePairCandidate(ea, vb[eb.v0], vb[eb.v1] - vb[eb.v0], cross(n1, n0), -dot(n0, ea.bxa),
+                                  -dot(n1, ea.bxa), margin, axis, len2, num) &&
                 num / std::sqrt(len2) > margin)
                 return false;
         }
     }
     if (hint) *hint = {};
 
-    // Face axes of A, then of B; the faces are read in order, so the first that separates and the best are those of
-    // a plain scan.
-    const auto scanFaces = [&](const FaceSide& side, SatHint::Kind kind, float& best, int& bestFace) {
+    // Face axes of A, then of B, each read in face order, so that the first that separates and the best are those
+    // of a plain scan. First only the faces that can be apart by more than `floor` (a little overlap): none of the
+    // others separates, or beats a best above the floor; when the best is below it (deep overlap), every face.
+    const auto scanFaces = [&](bool ofB, const std::uint32_t* faces, int count, SatHint::Kind kind, float& best,
+                               int& bestFace) {
         best = -INFINITY, bestFace = 0;
-        for (int f0 = 0; f0 < side.faceCount; f0 += static_cast<int>(simd::kLanes)) {
-            lowestAlongFaces(side.rows, f0, side.vertices, side.vertexCount, lowestOnFace);
-            for (int k = 0; k < static_cast<int>(simd::kLanes) && f0 + k < side.faceCount; ++k) {
-                const float sep = lowestOnFace[k] - side.offsets[f0 + k];
-                if (sep > margin) return separatedBy(kind, f0 + k, 0);  // the common exit, taken as soon as found
-                if (sep > best) best = sep, bestFace = f0 + k;
+        float sep[simd::kLanes];
+        for (int c0 = 0; c0 < count; c0 += static_cast<int>(simd::kLanes)) {
+            const int n = std::min(static_cast<int>(simd::kLanes), count - c0);
+            separations(ofB, faces + c0, n, sep);
+            for (int k = 0; k < n; ++k) {
+                const int f = static_cast<int>(faces[c0 + k]);
+                if (sep[k] > margin) return separatedBy(kind, f, 0);  // the common exit, taken as soon as found
+                if (sep[k] > best) best = sep[k], bestFace = f;
             }
         }
         return true;
     };
+    const float floor = minf(margin, -kFaceConeDepth * maxf(A.size, B.size));
+    const float faceCos = coneCos(floor);
+    const int mostFaces = std::max(A.faceCount, B.faceCount);
+    if (sc.faces.size() < static_cast<std::size_t>(mostFaces) + simd::kLanes) {
+        sc.faces.resize(static_cast<std::size_t>(mostFaces) + simd::kLanes);
+        sc.everyFace.resize(static_cast<std::size_t>(mostFaces));
+        for (std::size_t f = 0; f < sc.everyFace.size(); ++f) sc.everyFace[f] = static_cast<std::uint32_t>(f);
+    }
+    const auto bestFace = [&](bool ofB, SatHint::Kind kind, float& best, int& face) {
+        const HullView& H = ofB ? B : A;
+        const int near = facesInCone(H.normalRows, H.faceCount, ofB ? towardAInB : towardB, faceCos, sc.faces.data());
+        if (!scanFaces(ofB, sc.faces.data(), near, kind, best, face)) return false;
+        return best >= floor || scanFaces(ofB, sc.everyFace.data(), H.faceCount, kind, best, face);
+    };
     float sepA, sepB;
     int faceA, faceB;
-    if (!scanFaces(facesA, SatHint::kFaceA, sepA, faceA) || !scanFaces(facesB, SatHint::kFaceB, sepB, faceB))
-        return false;
+    if (!bestFace(false, SatHint::kFaceA, sepA, faceA) || !bestFace(true, SatHint::kFaceB, sepB, faceB)) return false;
 
     const float absTol = kBoxAxisAbsoluteTolerance * maxf(A.size, B.size);
     auto clearlyBetter = [&](float candidate, float current) {
@@ -327,24 +395,17 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     const float sepFace = useB ? sepB : sepA;
 
     // Edge pairs whose Gauss-map arcs cross (Gregorius' IsMinkowskiFace, with B's normals negated for the
-    // Minkowski difference A - B). Only a separation above `limit` matters: it separates or beats the face axis.
+    // Minkowski difference A - B). Only a separation above `limit` matters: it separates or beats the face axis; so
+    // only the edges whose arcs reach the cone of that limit are paired.
     const float limit = minf(margin, sepFace + kBoxAxisRelativeTolerance * std::fabs(sepFace) + absTol);
-    // Such a pair's axis n is on both arcs (A's, and B's negated) and, the hulls holding balls of their inradii
-    // around their interiors, n . d > limit + inradiusA + inradiusB with d the line between the interiors: only the
-    // edges whose arcs reach that cone around d (B's: around -d) are paired. The slack keeps every pair that rounding
-    // could lift above the limit, so the answer is the one of all pairs, bit for bit.
-    const Vec3 between = (r * B.interior + t) - A.interior;
-    const float distance = length(between);
-    const float slack = 1e-3f * (A.size + B.size);
-    float coneCos = -2;  // every edge
-    if (distance > 0 && A.inradius > 0 && B.inradius > 0)
-        coneCos = (limit + A.inradius + B.inradius - slack) / distance;
-    const Vec3 towardB = distance > 0 ? between / distance : Vec3{1, 0, 0};
-    // r^T (-towardB): the cone's axis for B's negated normals, in B's own frame.
-    const Vec3 uInB = -(towardB.x * r.row[0] + towardB.y * r.row[1] + towardB.z * r.row[2]);
-    edgesNearCone(A.arcCones, A.edgeCount, towardB, coneCos, sc.edgesA);
-    edgesNearCone(B.arcCones, B.edgeCount, uInB, coneCos, sc.edgesB);
-    const int countA = static_cast<int>(sc.edgesA.size());
+    const float edgeCos = coneCos(limit);
+    const int mostEdges = std::max(A.edgeCount, B.edgeCount);
+    if (sc.edgesA.size() < static_cast<std::size_t>(mostEdges) + simd::kLanes) {
+        sc.edgesA.resize(static_cast<std::size_t>(mostEdges) + simd::kLanes);
+        sc.edgesB.resize(static_cast<std::size_t>(mostEdges) + simd::kLanes);
+    }
+    const int countA = edgesNearCone(A.arcCones, A.edgeCount, towardB, edgeCos, sc.edgesA.data());
+    const int countB = edgesNearCone(B.arcCones, B.edgeCount, towardAInB, edgeCos, sc.edgesB.data());
     for (std::vector<float>& row : sc.arcsA)
         if (row.size() < paddedRow(countA)) row.resize(paddedRow(countA));
     for (int k = 0; k < 9; ++k) {
@@ -363,10 +424,11 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     int edgeA = -1, edgeB = -1;
     Vec3 axisE{};
     alignas(64) bool skip[simd::kLanes];
-    for (const std::uint32_t jb : sc.edgesB) {
-        const int j = static_cast<int>(jb);
+    for (int jb = 0; jb < countB; ++jb) {
+        const int j = static_cast<int>(sc.edgesB[static_cast<std::size_t>(jb)]);
         const HullEdge& eb = B.edges[j];
-        const Vec3 n0 = nb[eb.face0], n1 = nb[eb.face1], c = cross(n1, n0);  // (-n1) x (-n0)
+        const Vec3 n0 = normalB(static_cast<int>(eb.face0)), n1 = normalB(static_cast<int>(eb.face1));
+        const Vec3 c = cross(n1, n0);  // (-n1) x (-n0)
         const Vec3 dirB = vb[eb.v1] - vb[eb.v0];
         const FloatW n0x(n0.x), n0y(n0.y), n0z(n0.z), n1x(n1.x), n1y(n1.y), n1z(n1.z), cx(c.x), cy(c.y), cz(c.z);
         const FloatW zero(0.0f);
@@ -431,8 +493,9 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     const Vec3* rv = useB ? vb : va;
     const Vec3* iv = useB ? va : vb;
     const int fr = useB ? faceB : faceA;
-    const Vec3 refN = useB ? nb[fr] : A.normals[fr];
-    const float refOff = useB ? ob[fr] : A.offsets[fr];
+    Vec3 refN = A.normals[fr];
+    float refOff = A.offsets[fr];
+    if (useB) planeB(fr, refN, refOff);
     std::uint32_t deepest = 0;
     float lowest = INFINITY;
     for (int i = 0; i < I.vertexCount; ++i) {
@@ -441,14 +504,10 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     }
     int fi = 0;
     float mostAnti = INFINITY;
-    for (int f = 0; f < I.faceCount; ++f) {
-        const float c = dot(useB ? A.normals[f] : nb[f], refN);
-        if (c >= mostAnti) continue;
-        for (std::uint32_t k = I.faceStart[f]; k < I.faceStart[f + 1]; ++k)
-            if (I.faceVertices[k] == deepest) {
-                mostAnti = c, fi = f;
-                break;
-            }
+    for (std::uint32_t k = I.vertexFaceStart[deepest]; k < I.vertexFaceStart[deepest + 1]; ++k) {
+        const int f = static_cast<int>(I.vertexFaces[k]);  // ascending: ties keep the lowest face
+        const float c = dot(useB ? A.normals[f] : normalB(f), refN);
+        if (c < mostAnti) mostAnti = c, fi = f;
     }
     ClipVertex bufA[kClipCapacity], bufB[kClipCapacity];
     ClipVertex* cur = bufA;
@@ -863,6 +922,14 @@ HullAdjacency buildHullAdjacency(const ConvexHull& hull) {
                                  len > 1e-6f ? std::sin(half) : 0.0f};
         for (int r = 0; r < 5; ++r) adj.arcCones[r][e] = values[r];
     }
+    adj.vertexFaceStart.assign(nv + 1, 0);
+    for (std::uint32_t k = 0; k < hull.faceStart[faces]; ++k) ++adj.vertexFaceStart[hull.faceVertices[k] + 1];
+    for (std::size_t i = 0; i < nv; ++i) adj.vertexFaceStart[i + 1] += adj.vertexFaceStart[i];
+    adj.vertexFaces.resize(adj.vertexFaceStart[nv]);
+    std::vector<std::uint32_t> next(adj.vertexFaceStart.begin(), adj.vertexFaceStart.end() - 1);
+    for (std::uint32_t f = 0; f < faces; ++f)  // in face order, so each vertex's faces ascend
+        for (std::uint32_t k = hull.faceStart[f]; k < hull.faceStart[f + 1]; ++k)
+            adj.vertexFaces[next[hull.faceVertices[k]]++] = f;
     adj.inradius = faces > 0 ? INFINITY : 0.0f;
     for (std::uint32_t f = 0; f < faces; ++f)
         adj.inradius = minf(adj.inradius, hull.faceOffsets[f] - dot(hull.faceNormals[f], adj.interior));

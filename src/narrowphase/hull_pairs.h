@@ -93,13 +93,18 @@ struct HullAdjacency {
     std::vector<float> normalRows[3];
     /// The radius of a ball around `interior` that lies inside the hull (the nearest face plane's distance). Along
     /// a unit axis n two hulls are apart by at most n . (interiorB - interiorA) - inradiusA - inradiusB, so only axes
-    /// near the line between the interiors can separate them by much: the SAT tests only the edge pairs whose arcs
-    /// reach that cone (zero, or less, tests them all).
+    /// near the line between the interiors can separate them by much: the SAT tests only the faces and edges whose
+    /// axes can reach that cone (zero tests them all).
     float inradius = 0;
     /// Per edge, a cone around its arc on the Gauss map: the unit midpoint of its two face normals (rows x y z) and
     /// the cosine and sine of half the angle between them (rows 3 and 4), in SoA rows padded like the arcs.
     std::vector<float> arcCones[5];
+    /// The faces around each vertex, ascending: vertex v's are vertexFaces[vertexFaceStart[v] .. [v + 1]).
+    std::vector<std::uint32_t> vertexFaceStart, vertexFaces;
 };
+/// The face scans first test only the faces that can be apart by more than this fraction of the larger hull's size
+/// in overlap (HullAdjacency::inradius), and all faces when the pair overlaps more.
+inline constexpr float kFaceConeDepth = 0.1f;
 /// The widest SIMD batch of any build of the core (AVX-512, 16 floats): the arcs are padded for every level.
 inline constexpr std::size_t kHullArcPadding = 16;
 HullAdjacency buildHullAdjacency(const ConvexHull& hull);

@@ -389,11 +389,11 @@ TEST(HullPairs, SatHintNeverChangesTheAnswer) {
     EXPECT_GT(answeredByHint, separated / 2);
 }
 
-// The edge pairs are paired only where their arcs reach the cone of axes that could separate the hulls by more
-// than the search's limit (HullAdjacency::inradius). An inradius of zero turns that off: the manifolds must be the
-// same bit for bit with and without it, over poses from deep overlap to apart, hull-hull and box-hull, and among
-// them many that an edge pair decides.
-TEST(HullPairs, EdgeConeNeverChangesTheAnswer) {
+// The face scans and the edge pairs test only the faces and edges that can reach the cone of axes along which the
+// hulls could be apart by more than what matters (HullAdjacency::inradius). An inradius of zero turns that off: the
+// manifolds must be the same bit for bit with and without it, over poses from deep overlap to apart, hull-hull and
+// box-hull, and among them many that an edge pair decides.
+TEST(HullPairs, AxisConesNeverChangeTheAnswer) {
     std::mt19937 rng(29);
     std::uniform_real_distribution<float> u(-1, 1), frac(0, 1);
     int touching = 0, edgeContacts = 0;
