@@ -140,6 +140,13 @@ struct WorldSettings {
     /// capsule and box pairs, but not capsule-box) are always computed: they cost less than the lookup. Jolt does the
     /// same by default for pairs that moved less than 1 mm and turned less than 2 degrees.
     float manifoldReuseDistance = 0.001f;
+    /// A pair of polytopes (hull-hull, box-hull) that touched last step makes its contact again from the feature
+    /// that decided it (a reference face or an edge pair) without testing every axis, while that feature's
+    /// separation stays within this distance of what the full search found, and for at most 8 steps in a row; then
+    /// the search runs again. The contact may then come from a feature the search would have left for another up to
+    /// about this much shallower (Box3D keeps its SAT cache the same way, at its linear slop); 0 searches every pair
+    /// every step, m.
+    float contactFeatureDrift = 0.005f;
     Integrator integrator = Integrator::SemiImplicitEuler;
     /// Effects the scene declares. The engine removes those the content cannot show (see World::activeEffects).
     EffectSet effects = EffectSet::defaults();

@@ -272,7 +272,7 @@ int facesInCone(const std::vector<float>* normalRows, int faceCount, Vec3 u, flo
 // such a cone; a slack keeps every axis that rounding could lift over the floor, so the answer is that of the plain
 // search bit for bit (HullPairs.AxisConesNeverChangeTheAnswer).
 bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView& B, const Transform& poseB,
-                      float margin, Manifold& out, SatHint* hint) {
+                      float margin, Manifold& out, SatHint* hint, float featureDrift) {
     out.pointCount = 0;
     Scratch& sc = scratch();
     const Quat qInv = conjugate(poseA.rotation);
@@ -324,9 +324,125 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         lowestAlongFaces(laneRows, 0, ofB ? va : vb, ofB ? A.vertexCount : B.vertexCount, lowestOnFace);
         for (int k = 0; k < count; ++k) sep[k] = lowestOnFace[k] - offsets[k];
     };
+    // An edge pair's contact: one point, at the closest points of the two edges.
+    const auto edgeContact = [&](int edgeA, int edgeB, Vec3 axisE) {
+        const Rot ra = toRot(poseA.rotation);
+        const HullEdge& ea = A.edges[edgeA];
+        const HullEdge& eb = B.edges[edgeB];
+        const Vec3 pa = va[ea.v0], da = va[ea.v1] - pa, pb = vb[eb.v0], db = vb[eb.v1] - pb;
+        float s, w;
+        closestSegmentPoints(pa, da, pb, db, s, w);
+        const Vec3 ca = pa + da * s, cb = pb + db * w;
+        Vec3 normal = axisE;
+        float depth = dot(ca - cb, axisE);
+        // Apart, the edges' closest points are the contact: their distance can exceed the axis's separation when
+        // one of them is an edge's end (then the axis is not the direction between them), and the point on A must
+        // be `depth` along the normal from the point on B.
+        if (const float apart = length(cb - ca); depth < 0 && apart > 0) normal = (cb - ca) / apart, depth = -apart;
+        if (depth < -margin) return false;
+        out.normal = ra * normal;
+        out.points[0].position = poseA.position + ra * cb;
+        out.points[0].depth = depth;
+        out.points[0].feature = (2u << 30) | ((static_cast<std::uint32_t>(edgeA) & 0x7FFFu) << 15) |
+                                (static_cast<std::uint32_t>(edgeB) & 0x7FFFu);
+        out.pointCount = 1;
+        return true;
+    };
+    // Face contact. Reference face on A (or B). Incident face: among the other hull's faces through its deepest
+    // vertex along the reference normal, the most anti-parallel one. (The most anti-parallel face overall can lie
+    // beside the reference face for general hulls, and then clips to nothing.)
+    const auto faceContact = [&](bool useB, int fr) {
+        const Rot ra = toRot(poseA.rotation);
+        const HullView& R = useB ? B : A;
+        const HullView& I = useB ? A : B;
+        const Vec3* rv = useB ? vb : va;
+        const Vec3* iv = useB ? va : vb;
+        Vec3 refN = A.normals[fr];
+        float refOff = A.offsets[fr];
+        if (useB) planeB(fr, refN, refOff);
+        std::uint32_t deepest = 0;
+        float lowest = INFINITY;
+        for (int i = 0; i < I.vertexCount; ++i) {
+            const float h = dot(refN, iv[i]);
+            if (h < lowest) lowest = h, deepest = static_cast<std::uint32_t>(i);
+        }
+        int fi = 0;
+        float mostAnti = INFINITY;
+        for (std::uint32_t k = I.vertexFaceStart[deepest]; k < I.vertexFaceStart[deepest + 1]; ++k) {
+            const int f = static_cast<int>(I.vertexFaces[k]);  // ascending: ties keep the lowest face
+            const float c = dot(useB ? A.normals[f] : normalB(f), refN);
+            if (c < mostAnti) mostAnti = c, fi = f;
+        }
+        ClipVertex bufA[kClipCapacity], bufB[kClipCapacity];
+        ClipVertex* cur = bufA;
+        ClipVertex* nxt = bufB;
+        const std::uint32_t i0 = I.faceStart[fi], i1 = I.faceStart[fi + 1];
+        int n = 0;
+        for (std::uint32_t k = i0; k < i1 && n < kClipCapacity; ++k, ++n)
+            cur[n] = {iv[I.faceVertices[k]], static_cast<std::uint16_t>(n), static_cast<std::uint16_t>(n)};
+        const std::uint32_t r0 = R.faceStart[fr], r1 = R.faceStart[fr + 1];
+        for (std::uint32_t k = r0; k < r1 && n > 0; ++k) {
+            const Vec3 p0 = rv[R.faceVertices[k]], p1 = rv[R.faceVertices[k + 1 == r1 ? r0 : k + 1]];
+            const Vec3 side = cross(p1 - p0, refN);
+            n = clipPolygon(cur, n, nxt, side, dot(side, p0), static_cast<int>(k - r0));
+            ClipVertex* tmp = cur;
+            cur = nxt;
+            nxt = tmp;
+        }
+        Vec3 pts[kClipCapacity];
+        float depth[kClipCapacity];
+        std::uint16_t ids[kClipCapacity];
+        int m = 0;
+        for (int k = 0; k < n; ++k) {
+            const float d = refOff - dot(refN, cur[k].p);
+            if (d >= -margin) pts[m] = cur[k].p, depth[m] = d, ids[m] = cur[k].id, ++m;
+        }
+        if (m == 0) {
+            // Nothing of the incident face lies over the reference face (deep, lopsided overlaps where hysteresis kept
+            // a face axis): report the deepest incident vertex alone, so the pair is never dropped while the SAT says
+            // it overlaps.
+            const float d = refOff - lowest;
+            if (d < -margin) return false;
+            pts[0] = iv[deepest], depth[0] = d, m = 1;
+            ids[0] = 0x7FFF;
+            for (std::uint32_t k = I.faceStart[fi]; k < I.faceStart[fi + 1]; ++k)
+                if (I.faceVertices[k] == deepest) ids[0] = static_cast<std::uint16_t>(k - I.faceStart[fi]);
+        }
+        Vec3 u, v;
+        planeBasis(refN, u, v);
+        int chosen[4];
+        const int count = reduceContactPoints(pts, depth, m, u, v, chosen);
+        out.normal = ra * (useB ? -refN : refN);
+        const std::uint32_t base = ((useB ? 1u : 0u) << 30) | ((static_cast<std::uint32_t>(fr) & 0xFFu) << 22) |
+                                   ((static_cast<std::uint32_t>(fi) & 0x3Fu) << 16);
+        for (int k = 0; k < count; ++k) {
+            const int c = chosen[k];
+            // With the reference face on B the clipped points lie on A's face: move them onto B's face.
+            const Vec3 p = useB ? pts[c] + refN * depth[c] : pts[c];
+            out.points[k].position = poseA.position + ra * p;
+            out.points[k].depth = depth[c];
+            out.points[k].feature = base | ids[c];
+        }
+        out.pointCount = count;
+        return count > 0;
+    };
     const auto separatedBy = [&](SatHint::Kind kind, int a, int b) {
-        if (hint) *hint = {kind, true, static_cast<std::uint16_t>(a), static_cast<std::uint16_t>(b)};
+        if (hint) *hint = {kind, true, 0, static_cast<std::uint16_t>(a), static_cast<std::uint16_t>(b), 0};
         return false;
+    };
+    // An edge pair's axis (unit, away from A) and separation, when the pair is a face of the Minkowski difference
+    // whose separation exceeds `limit`.
+    const auto edgeAxis = [&](int ia, int jb, float limit, Vec3& axis, float& sep) {
+        const EdgeOfA ea = edgeOfA(A, ia);
+        const HullEdge& eb = B.edges[jb];
+        const Vec3 n0 = normalB(static_cast<int>(eb.face0)), n1 = normalB(static_cast<int>(eb.face1));
+        float len2, num;
+        if (!edgePairCandidate(ea, vb[eb.v0], vb[eb.v1] - vb[eb.v0], cross(n1, n0), -dot(n0, ea.bxa), -dot(n1, ea.bxa),
+                               limit, axis, len2, num))
+            return false;
+        sep = num / std::sqrt(len2);
+        axis = axis / std::sqrt(len2);
+        return true;
     };
 
     // Last call's separating axis first: one axis instead of the search, when the pair is still apart along it.
@@ -337,16 +453,35 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         if (hint->kind == SatHint::kFaceA && a < A.faceCount) separations(false, &face, 1, &sep);
         if (hint->kind == SatHint::kFaceB && a < B.faceCount) separations(true, &face, 1, &sep);
         if (sep > margin) return false;
-        if (hint->kind == SatHint::kEdges && a < A.edgeCount && b < B.edgeCount) {
-            const EdgeOfA ea = edgeOfA(A, a);
-            const HullEdge& eb = B.edges[b];
-            const Vec3 n0 = normalB(static_cast<int>(eb.face0)), n1 = normalB(static_cast<int>(eb.face1));
-            Vec3 axis;
-            float len2, num;
-            if (edgePairCandidate(ea, vb[eb.v0], vb[eb.v1] - vb[eb.v0], cross(n1, n0), -dot(n0, ea.bxa),
-                                  -dot(n1, ea.bxa), margin, axis, len2, num) &&
-                num / std::sqrt(len2) > margin)
-                return false;
+        Vec3 axis;
+        if (hint->kind == SatHint::kEdges && a < A.edgeCount && b < B.edgeCount && edgeAxis(a, b, margin, axis, sep) &&
+            sep > margin)
+            return false;
+    }
+    // Last call's contact feature (reference face or edge pair), when the pair touched: its contact is built again
+    // without the search while the feature's separation stays within featureDrift of what the search found, for at
+    // most kMaxFeatureReuses calls (Box3D's SAT cache keeps a feature the same way; the count bounds how long a
+    // turning body can keep a face that another has overtaken without its depth showing it). A feature that now
+    // separates the pair is an exact answer: no contact.
+    if (hint && !hint->separated && hint->kind != SatHint::kNone && featureDrift > 0 &&
+        hint->reuses < kMaxFeatureReuses) {
+        const SatHint last = *hint;
+        const std::uint32_t face = last.a;
+        float sep = -INFINITY;
+        Vec3 axis{};
+        bool valid = false;
+        if (last.kind == SatHint::kFaceA && last.a < A.faceCount) separations(false, &face, 1, &sep), valid = true;
+        if (last.kind == SatHint::kFaceB && last.a < B.faceCount) separations(true, &face, 1, &sep), valid = true;
+        if (last.kind == SatHint::kEdges && last.a < A.edgeCount && last.b < B.edgeCount)
+            valid = edgeAxis(last.a, last.b, -INFINITY, axis, sep);
+        if (valid && sep > margin) return separatedBy(last.kind, last.a, last.b);
+        if (valid && std::fabs(sep - last.separation) <= featureDrift) {
+            const bool touching = last.kind == SatHint::kEdges ? edgeContact(last.a, last.b, axis)
+                                                               : faceContact(last.kind == SatHint::kFaceB, last.a);
+            if (touching) {
+                hint->reuses = static_cast<std::uint8_t>(last.reuses + 1);
+                return true;
+            }
         }
     }
     if (hint) *hint = {};
@@ -459,109 +594,17 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         }
     }
 
-    const Rot ra = toRot(poseA.rotation);
     if (edgeA >= 0 && clearlyBetter(sepE, sepFace)) {
-        const HullEdge& ea = A.edges[edgeA];
-        const HullEdge& eb = B.edges[edgeB];
-        const Vec3 pa = va[ea.v0], da = va[ea.v1] - pa, pb = vb[eb.v0], db = vb[eb.v1] - pb;
-        float s, w;
-        closestSegmentPoints(pa, da, pb, db, s, w);
-        const Vec3 ca = pa + da * s, cb = pb + db * w;
-        Vec3 normal = axisE;
-        float depth = dot(ca - cb, axisE);
-        // Apart, the edges' closest points are the contact: their distance can exceed the axis's separation when
-        // one of them is an edge's end (then the axis is not the direction between them), and the point on A must
-        // be `depth` along the normal from the point on B.
-        if (const float apart = length(cb - ca); depth < 0 && apart > 0) normal = (cb - ca) / apart, depth = -apart;
-        if (depth < -margin) return false;
-        out.normal = ra * normal;
-        out.points[0].position = poseA.position + ra * cb;
-        out.points[0].depth = depth;
-        out.points[0].feature = (2u << 30) | ((static_cast<std::uint32_t>(edgeA) & 0x7FFFu) << 15) |
-                                (static_cast<std::uint32_t>(edgeB) & 0x7FFFu);
-        out.pointCount = 1;
+        if (!edgeContact(edgeA, edgeB, axisE)) return false;
         if (hint)
-            *hint = {SatHint::kEdges, false, static_cast<std::uint16_t>(edgeA), static_cast<std::uint16_t>(edgeB)};
+            *hint = {
+                SatHint::kEdges, false, 0, static_cast<std::uint16_t>(edgeA), static_cast<std::uint16_t>(edgeB), sepE};
         return true;
     }
-
-    // Face contact. Reference face on A (or B). Incident face: among the other hull's faces through its deepest
-    // vertex along the reference normal, the most anti-parallel one. (The most anti-parallel face overall can lie
-    // beside the reference face for general hulls, and then clips to nothing.)
-    const HullView& R = useB ? B : A;
-    const HullView& I = useB ? A : B;
-    const Vec3* rv = useB ? vb : va;
-    const Vec3* iv = useB ? va : vb;
     const int fr = useB ? faceB : faceA;
-    Vec3 refN = A.normals[fr];
-    float refOff = A.offsets[fr];
-    if (useB) planeB(fr, refN, refOff);
-    std::uint32_t deepest = 0;
-    float lowest = INFINITY;
-    for (int i = 0; i < I.vertexCount; ++i) {
-        const float h = dot(refN, iv[i]);
-        if (h < lowest) lowest = h, deepest = static_cast<std::uint32_t>(i);
-    }
-    int fi = 0;
-    float mostAnti = INFINITY;
-    for (std::uint32_t k = I.vertexFaceStart[deepest]; k < I.vertexFaceStart[deepest + 1]; ++k) {
-        const int f = static_cast<int>(I.vertexFaces[k]);  // ascending: ties keep the lowest face
-        const float c = dot(useB ? A.normals[f] : normalB(f), refN);
-        if (c < mostAnti) mostAnti = c, fi = f;
-    }
-    ClipVertex bufA[kClipCapacity], bufB[kClipCapacity];
-    ClipVertex* cur = bufA;
-    ClipVertex* nxt = bufB;
-    const std::uint32_t i0 = I.faceStart[fi], i1 = I.faceStart[fi + 1];
-    int n = 0;
-    for (std::uint32_t k = i0; k < i1 && n < kClipCapacity; ++k, ++n)
-        cur[n] = {iv[I.faceVertices[k]], static_cast<std::uint16_t>(n), static_cast<std::uint16_t>(n)};
-    const std::uint32_t r0 = R.faceStart[fr], r1 = R.faceStart[fr + 1];
-    for (std::uint32_t k = r0; k < r1 && n > 0; ++k) {
-        const Vec3 p0 = rv[R.faceVertices[k]], p1 = rv[R.faceVertices[k + 1 == r1 ? r0 : k + 1]];
-        const Vec3 side = cross(p1 - p0, refN);
-        n = clipPolygon(cur, n, nxt, side, dot(side, p0), static_cast<int>(k - r0));
-        ClipVertex* tmp = cur;
-        cur = nxt;
-        nxt = tmp;
-    }
-    Vec3 pts[kClipCapacity];
-    float depth[kClipCapacity];
-    std::uint16_t ids[kClipCapacity];
-    int m = 0;
-    for (int k = 0; k < n; ++k) {
-        const float d = refOff - dot(refN, cur[k].p);
-        if (d >= -margin) pts[m] = cur[k].p, depth[m] = d, ids[m] = cur[k].id, ++m;
-    }
-    if (m == 0) {
-        // Nothing of the incident face lies over the reference face (deep, lopsided overlaps where hysteresis kept
-        // a face axis): report the deepest incident vertex alone, so the pair is never dropped while the SAT says
-        // it overlaps.
-        const float d = refOff - lowest;
-        if (d < -margin) return false;
-        pts[0] = iv[deepest], depth[0] = d, m = 1;
-        ids[0] = 0x7FFF;
-        for (std::uint32_t k = I.faceStart[fi]; k < I.faceStart[fi + 1]; ++k)
-            if (I.faceVertices[k] == deepest) ids[0] = static_cast<std::uint16_t>(k - I.faceStart[fi]);
-    }
-    Vec3 u, v;
-    planeBasis(refN, u, v);
-    int chosen[4];
-    const int count = reduceContactPoints(pts, depth, m, u, v, chosen);
-    out.normal = ra * (useB ? -refN : refN);
-    const std::uint32_t base = ((useB ? 1u : 0u) << 30) | ((static_cast<std::uint32_t>(fr) & 0xFFu) << 22) |
-                               ((static_cast<std::uint32_t>(fi) & 0x3Fu) << 16);
-    for (int k = 0; k < count; ++k) {
-        const int c = chosen[k];
-        // With the reference face on B the clipped points lie on A's face: move them onto B's face.
-        const Vec3 p = useB ? pts[c] + refN * depth[c] : pts[c];
-        out.points[k].position = poseA.position + ra * p;
-        out.points[k].depth = depth[c];
-        out.points[k].feature = base | ids[c];
-    }
-    out.pointCount = count;
-    if (hint && count > 0) *hint = {useB ? SatHint::kFaceB : SatHint::kFaceA, false, static_cast<std::uint16_t>(fr), 0};
-    return count > 0;
+    if (!faceContact(useB, fr)) return false;
+    if (hint) *hint = {useB ? SatHint::kFaceB : SatHint::kFaceA, false, 0, static_cast<std::uint16_t>(fr), 0, sepFace};
+    return true;
 }
 
 /// Segment feature of parameter t in [0, 1]: 1 at the start, 2 at the end, 0 between.
@@ -938,8 +981,9 @@ HullAdjacency buildHullAdjacency(const ConvexHull& hull) {
 }
 
 bool collideHulls(const ConvexHull& a, const HullAdjacency& adjA, const Transform& poseA, const ConvexHull& b,
-                  const HullAdjacency& adjB, const Transform& poseB, float margin, Manifold& out, SatHint* hint) {
-    return collidePolytopes(viewOf(a, adjA), poseA, viewOf(b, adjB), poseB, margin, out, hint);
+                  const HullAdjacency& adjB, const Transform& poseB, float margin, Manifold& out, SatHint* hint,
+                  float featureDrift) {
+    return collidePolytopes(viewOf(a, adjA), poseA, viewOf(b, adjB), poseB, margin, out, hint, featureDrift);
 }
 
 bool collideHulls(const ConvexHull& a, const Transform& poseA, const ConvexHull& b, const Transform& poseB,
@@ -951,10 +995,11 @@ bool collideHulls(const ConvexHull& a, const Transform& poseA, const ConvexHull&
 }
 
 bool collideBoxHull(const Transform& box, Vec3 half, const ConvexHull& hull, const HullAdjacency& adj,
-                    const Transform& poseHull, float margin, Manifold& out, SatHint* hint) {
+                    const Transform& poseHull, float margin, Manifold& out, SatHint* hint, float featureDrift) {
     Vec3 vertices[8];
     float offsets[6];
-    return collidePolytopes(boxView(half, vertices, offsets), box, viewOf(hull, adj), poseHull, margin, out, hint);
+    return collidePolytopes(boxView(half, vertices, offsets), box, viewOf(hull, adj), poseHull, margin, out, hint,
+                            featureDrift);
 }
 
 bool collideBoxHull(const Transform& box, Vec3 half, const ConvexHull& hull, const Transform& poseHull, float margin,

@@ -110,31 +110,43 @@ inline constexpr std::size_t kHullArcPadding = 16;
 HullAdjacency buildHullAdjacency(const ConvexHull& hull);
 
 /// The SAT axis that decided a pair's last result: the axis that separated it by more than the margin, or the
-/// contact's reference face or edge pair. Given back on the pair's next call, a separating axis is tested before
-/// the whole search: if it still separates, the pair is done for the cost of one axis. Every axis it can name is
-/// one the whole search tests too, with the same arithmetic, so the answer is the same with or without the hint;
-/// only the time differs. A hint for other hulls (indices out of range) is ignored.
+/// contact's reference face or edge pair. Given back on the pair's next call:
+/// - a separating axis is tested before the whole search: if it still separates, the pair is done for the cost of
+///   one axis. Every axis it can name is one the whole search tests too, with the same arithmetic, so the answer is
+///   the same with or without it; only the time differs.
+/// - a contact feature, with a featureDrift above zero, makes the contact again without the search while the
+///   feature's separation stays within featureDrift of `separation` (what the search found), for at most
+///   kMaxFeatureReuses calls in a row; then, or when it drifts, the search runs again. This one trades exactness for
+///   time: the search could have chosen another feature, deeper by up to the drift (more after turning; see
+///   HullPairs.FeatureReuseStaysCloseToTheSearch). With featureDrift zero the answer is the search's, bit for bit.
+/// A hint for other hulls (indices out of range) is ignored.
 struct SatHint {
     enum Kind : std::uint8_t { kNone, kFaceA, kFaceB, kEdges };
     Kind kind = kNone;
     bool separated = false;      ///< the axis separated the pair (else it made the contact)
+    std::uint8_t reuses = 0;     ///< contacts made from this feature since the search found it
     std::uint16_t a = 0, b = 0;  ///< face of A or of B (in `a`), or edge of A and edge of B
+    float separation = 0;        ///< a contact feature's separation when the search found it
 };
+/// A contact feature is used at most this many calls in a row before the search checks it again.
+inline constexpr std::uint8_t kMaxFeatureReuses = 8;
 
 /// Contact manifold of hull A and hull B (posed by poseA / poseB). Returns false with out.pointCount = 0 when the
 /// hulls are farther apart than `margin` along some axis. Otherwise: normal A -> B, 1 to 4 points on B's surface
-/// with depth >= -margin, feature ids as above. `hint`, when given, is read and rewritten (SatHint).
+/// with depth >= -margin, feature ids as above. `hint`, when given, is read and rewritten (SatHint, which also says
+/// what featureDrift does).
 bool collideHulls(const ConvexHull& a, const Transform& poseA, const ConvexHull& b, const Transform& poseB,
                   float margin, Manifold& out);
 bool collideHulls(const ConvexHull& a, const HullAdjacency& adjA, const Transform& poseA, const ConvexHull& b,
                   const HullAdjacency& adjB, const Transform& poseB, float margin, Manifold& out,
-                  SatHint* hint = nullptr);
+                  SatHint* hint = nullptr, float featureDrift = 0);
 
 /// Box A (half extents `half`) against hull B: the box as an 8-vertex hull built from a static unit cube.
 bool collideBoxHull(const Transform& box, Vec3 half, const ConvexHull& hull, const Transform& poseHull, float margin,
                     Manifold& out);
 bool collideBoxHull(const Transform& box, Vec3 half, const ConvexHull& hull, const HullAdjacency& adj,
-                    const Transform& poseHull, float margin, Manifold& out, SatHint* hint = nullptr);
+                    const Transform& poseHull, float margin, Manifold& out, SatHint* hint = nullptr,
+                    float featureDrift = 0);
 
 /// Capsule A against box B. Normal from the capsule to the box; points on the box surface; 1 or 2 points.
 bool collideCapsuleBox(const CapsuleSegment& capsule, const Transform& box, Vec3 half, float margin, Manifold& out);

@@ -134,7 +134,7 @@ void NarrowPhaseStage::runChunk(NarrowChunk& chunk, Scratch& scratch, const Body
         if (job.triangles == 0) {
             Manifold& out = chunk.manifolds[j];
             out.pointCount = 0;
-            kernel.pair(a, b, margin, hulls_, job.hint, out);
+            kernel.pair(a, b, margin, params.featureDrift, hulls_, job.hint, out);
             continue;
         }
         mesh.prepare(a, b);

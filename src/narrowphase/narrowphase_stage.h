@@ -35,6 +35,9 @@ struct NarrowPhaseParams {
     /// WorldSettings::manifoldReuseDistance: a pair whose shapes moved less than this relative to each other since
     /// its manifolds were computed gets them again, moved with its bodies (narrowphase/manifold_reuse.h); 0: never.
     float reuseDistance = 0;
+    /// WorldSettings::contactFeatureDrift: a touching pair of polytopes makes its contact from last step's feature
+    /// while that feature's separation stays within this of what the search found (hull_pairs.h, SatHint); 0: never.
+    float featureDrift = 0;
 };
 
 class NarrowPhaseStage {

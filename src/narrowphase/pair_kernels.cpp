@@ -13,54 +13,59 @@ namespace {
 // The one-pair kernels in one signature. The box-hull and hull-hull SAT keeps its hint (hull_pairs.h); the capsule
 // and sphere kernels against hulls find their contact by GJK on the cores and take none.
 
-void spheres(const Posed& a, const Posed& b, float margin, const HullAdjacencies&, SatHint&, Manifold& out) {
+void spheres(const Posed& a, const Posed& b, float margin, float, const HullAdjacencies&, SatHint&, Manifold& out) {
     collideSpheres(a.pose.position, a.shape->radius, b.pose.position, b.shape->radius, margin, out);
 }
 
-void sphereBox(const Posed& a, const Posed& b, float margin, const HullAdjacencies&, SatHint&, Manifold& out) {
+void sphereBox(const Posed& a, const Posed& b, float margin, float, const HullAdjacencies&, SatHint&, Manifold& out) {
     collideSphereBox(a.pose.position, a.shape->radius, b.pose, b.shape->halfExtents, margin, out);
 }
 
-void sphereCapsule(const Posed& a, const Posed& b, float margin, const HullAdjacencies&, SatHint&, Manifold& out) {
+void sphereCapsule(const Posed& a, const Posed& b, float margin, float, const HullAdjacencies&, SatHint&,
+                   Manifold& out) {
     collideSphereCapsule(a.pose.position, a.shape->radius, segmentOf(b), margin, out);
 }
 
-void boxes(const Posed& a, const Posed& b, float margin, const HullAdjacencies&, SatHint&, Manifold& out) {
+void boxes(const Posed& a, const Posed& b, float margin, float, const HullAdjacencies&, SatHint&, Manifold& out) {
     collideBoxes(a.pose, a.shape->halfExtents, b.pose, b.shape->halfExtents, margin, out);
 }
 
-void capsules(const Posed& a, const Posed& b, float margin, const HullAdjacencies&, SatHint&, Manifold& out) {
+void capsules(const Posed& a, const Posed& b, float margin, float, const HullAdjacencies&, SatHint&, Manifold& out) {
     collideCapsules(segmentOf(a), segmentOf(b), margin, out);
 }
 
 /// A sphere is a capsule whose segment has no length.
-void sphereHull(const Posed& a, const Posed& b, float margin, const HullAdjacencies& hulls, SatHint&, Manifold& out) {
+void sphereHull(const Posed& a, const Posed& b, float margin, float, const HullAdjacencies& hulls, SatHint&,
+                Manifold& out) {
     const ConvexHull& hull = *b.shape->hull;
     collideCapsuleHull({a.pose.position, {}, a.shape->radius}, hull, hulls.of(hull), b.pose, margin, out);
 }
 
 /// The capsule-box kernel sees the capsule as A; the table's order has the box first. Same contact seen from the
 /// other body: the normal turns round and the points move across the overlap onto the capsule.
-void boxCapsule(const Posed& a, const Posed& b, float margin, const HullAdjacencies&, SatHint&, Manifold& out) {
+void boxCapsule(const Posed& a, const Posed& b, float margin, float, const HullAdjacencies&, SatHint&, Manifold& out) {
     collideCapsuleBox(segmentOf(b), a.pose, a.shape->halfExtents, margin, out);
     for (int p = 0; p < out.pointCount; ++p) out.points[p].position += out.normal * out.points[p].depth;
     out.normal = -out.normal;
 }
 
-void boxHull(const Posed& a, const Posed& b, float margin, const HullAdjacencies& hulls, SatHint& hint, Manifold& out) {
+void boxHull(const Posed& a, const Posed& b, float margin, float featureDrift, const HullAdjacencies& hulls,
+             SatHint& hint, Manifold& out) {
     const ConvexHull& hull = *b.shape->hull;
-    collideBoxHull(a.pose, a.shape->halfExtents, hull, hulls.of(hull), b.pose, margin, out, &hint);
+    collideBoxHull(a.pose, a.shape->halfExtents, hull, hulls.of(hull), b.pose, margin, out, &hint, featureDrift);
 }
 
-void capsuleHull(const Posed& a, const Posed& b, float margin, const HullAdjacencies& hulls, SatHint&, Manifold& out) {
+void capsuleHull(const Posed& a, const Posed& b, float margin, float, const HullAdjacencies& hulls, SatHint&,
+                 Manifold& out) {
     const ConvexHull& hull = *b.shape->hull;
     collideCapsuleHull(segmentOf(a), hull, hulls.of(hull), b.pose, margin, out);
 }
 
-void hulls(const Posed& a, const Posed& b, float margin, const HullAdjacencies& adjacency, SatHint& hint,
-           Manifold& out) {
+void hulls(const Posed& a, const Posed& b, float margin, float featureDrift, const HullAdjacencies& adjacency,
+           SatHint& hint, Manifold& out) {
     const ConvexHull &hullA = *a.shape->hull, &hullB = *b.shape->hull;
-    collideHulls(hullA, adjacency.of(hullA), a.pose, hullB, adjacency.of(hullB), b.pose, margin, out, &hint);
+    collideHulls(hullA, adjacency.of(hullA), a.pose, hullB, adjacency.of(hullB), b.pose, margin, out, &hint,
+                 featureDrift);
 }
 
 using K = PairKernel;

@@ -65,9 +65,10 @@ inline PairKernel pairKernel(ShapeKind lower, ShapeKind upper) {
 }
 
 /// Shape A against shape B (A's kind the lower), within `margin`: fills `out` (pointCount 0 when apart). The
-/// polytope kernels read and rewrite `hint` (hull_pairs.h); the others leave it alone.
-using PairFunction = void (*)(const Posed& a, const Posed& b, float margin, const HullAdjacencies& hulls, SatHint& hint,
-                              Manifold& out);
+/// polytope kernels read and rewrite `hint` and may build a contact from its feature within `featureDrift`
+/// (hull_pairs.h); the others leave both alone.
+using PairFunction = void (*)(const Posed& a, const Posed& b, float margin, float featureDrift,
+                              const HullAdjacencies& hulls, SatHint& hint, Manifold& out);
 /// Body A against a run of mesh triangles (triangle_runs.h).
 using TriangleRunFunction = void (*)(const TriangleRun& run, const HullAdjacencies& hulls, TriangleScratch& scratch,
                                      NarrowChunk& chunk);

@@ -558,7 +558,8 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
                "max_push_out_velocity",
                "baumgarte",
                "linear_slop",
-               "manifold_reuse_distance"});
+               "manifold_reuse_distance",
+               "contact_feature_drift"});
     // clang-format on
     WorldSettings& s = scene.settings;
     if (j.contains("dt")) s.timeStep = getFloat(j["dt"], at / "dt", Sign::Positive);
@@ -608,6 +609,7 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
     solverFloat("baumgarte", s.solver.baumgarte, Sign::NonNegative);
     solverFloat("linear_slop", s.solver.linearSlop, Sign::NonNegative);
     solverFloat("manifold_reuse_distance", s.manifoldReuseDistance, Sign::NonNegative);
+    solverFloat("contact_feature_drift", s.contactFeatureDrift, Sign::NonNegative);
     if (j.contains("sleep")) {
         const Loc sl = at / "sleep";
         const Json& o = expectObject(j["sleep"], sl, "a sleep settings object");

@@ -126,8 +126,10 @@ void findContacts(World::Impl& w, StepContext& step) {
     profile.meshTriangles = static_cast<std::uint32_t>(w.pairs.meshTriangles.size());
     {
         const auto timer = step.time(Stage::NarrowPhase);
-        w.narrowPhase.run(w.pairs, w.bodies, w.shapes,
-                          {w.settings.contactMargin, step.dt, w.settings.manifoldReuseDistance}, step.pool, w.contacts);
+        w.narrowPhase.run(
+            w.pairs, w.bodies, w.shapes,
+            {w.settings.contactMargin, step.dt, w.settings.manifoldReuseDistance, w.settings.contactFeatureDrift},
+            step.pool, w.contacts);
     }
     profile.reusedManifolds = w.narrowPhase.reusedManifolds();
     profile.manifolds = static_cast<std::uint32_t>(w.contacts.manifolds.size());

@@ -487,6 +487,7 @@ void World::setSettings(const WorldSettings& s) {
     requireFinite(kWhere, "settings.timeStep", s.timeStep);
     requireNonNegative(kWhere, "settings.contactMargin", s.contactMargin);
     requireNonNegative(kWhere, "settings.manifoldReuseDistance", s.manifoldReuseDistance);
+    requireNonNegative(kWhere, "settings.contactFeatureDrift", s.contactFeatureDrift);
     if (s.timeStep <= 0) fail(kWhere, "settings.timeStep must be > 0 (got " + std::to_string(s.timeStep) + ")");
     if (s.substeps < 1 || s.substeps > 64)
         fail(kWhere, "settings.substeps must be in [1, 64] (got " + std::to_string(s.substeps) + ")");

@@ -426,6 +426,66 @@ TEST(HullPairs, AxisConesNeverChangeTheAnswer) {
     EXPECT_GT(edgeContacts, 40);
 }
 
+// Contact-feature reuse (SatHint, featureDrift): pairs that settle and slide as in a pile (each call B moves up to
+// 4 mm and turns 0.005 rad relative to A), each computed with the feature kept from its last call and by the whole
+// search. Where both touch, the deepest point of the reused contact lies within the drift (plus 2 mm for the
+// motion of one call) of the search's; where the search finds the pair apart by more than the margin, the reused
+// contact's points are no deeper than the drift below the margin: a feature only ever stays while its own
+// separation is within the drift of what the search found for it. With a drift of zero the answer is the
+// search's, bit for bit. Most calls must be answered by the reused feature (else this tests nothing).
+TEST(HullPairs, FeatureReuseStaysCloseToTheSearch) {
+    constexpr float kDrift = 0.005f;
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<float> u(-1, 1), frac(0, 1);
+    int calls = 0, reused = 0;
+    float worstDepth = 0;
+    for (int it = 0; it < 150; ++it) {
+        const ConvexHull a = randomHull(rng, 32, 1.0f), b = randomHull(rng, 32, 1.0f);
+        const HullAdjacency adjA = buildHullAdjacency(a), adjB = buildHullAdjacency(b);
+        Vec3 dir{u(rng), u(rng), u(rng)};
+        dir = dir / std::fmax(length(dir), 1e-3f);
+        const Transform pa{{0, 0, 0}, randomRotation(rng)};
+        Transform pb{dir * (0.9f * (hullSize(a) + hullSize(b))), randomRotation(rng)};
+        // Bring B to first touch along -dir, then let it wander.
+        Manifold probe;
+        for (int k = 0; k < 400 && !collideHulls(a, adjA, pa, b, adjB, pb, 0.0f, probe); ++k)
+            pb.position = pb.position - dir * 0.005f;
+        SatHint kept, exact;
+        for (int s = 0; s < 40; ++s) {
+            const float margin = 0.02f;
+            Manifold fromFeature, searched, bitForBit;
+            const std::uint8_t reusesBefore = kept.reuses;
+            const SatHint keptBefore = kept;
+            const bool hitFeature = collideHulls(a, adjA, pa, b, adjB, pb, margin, fromFeature, &kept, kDrift);
+            const bool hitSearch = collideHulls(a, adjA, pa, b, adjB, pb, margin, searched, &exact);
+            SatHint noDrift = keptBefore;
+            ASSERT_EQ(hitSearch, collideHulls(a, adjA, pa, b, adjB, pb, margin, bitForBit, &noDrift, 0.0f));
+            expectSameManifold(searched, bitForBit, "no drift", it);
+            ++calls;
+            const bool answeredByFeature = hitFeature && kept.reuses == reusesBefore + 1;
+            reused += answeredByFeature;
+            const auto deepest = [](const Manifold& m) {
+                float d = -INFINITY;
+                for (int k = 0; k < m.pointCount; ++k) d = std::fmax(d, m.points[k].depth);
+                return d;
+            };
+            if (hitFeature && hitSearch) {
+                const float gap = std::fabs(deepest(fromFeature) - deepest(searched));
+                worstDepth = std::fmax(worstDepth, gap);
+                EXPECT_LE(gap, kDrift + 0.002f) << it << " step " << s;
+            } else if (hitFeature) {
+                EXPECT_LE(deepest(fromFeature), -margin + kDrift + 0.002f) << it << " step " << s;
+            }
+            const Vec3 slide{u(rng), u(rng), u(rng)};
+            pb = {pb.position + slide * 0.004f / std::sqrt(3.0f) - dir * 0.0005f,
+                  Quat::fromAxisAngle(Vec3{u(rng), u(rng), u(rng)} + Vec3{0, 0, 1e-3f}, 0.005f) * pb.rotation};
+        }
+    }
+    std::printf("feature reuse: %d of %d calls answered by the kept feature; worst deepest-point gap %.4f m\n", reused,
+                calls, worstDepth);
+    EXPECT_GT(reused, calls / 3);
+}
+
 TEST(HullPairs, SpeculativeMargin) {
     const ConvexHull cube = boxHull({0.5f, 0.5f, 0.5f});
     const Transform ground{{0, 0, 0}, {}};
