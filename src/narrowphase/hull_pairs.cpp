@@ -357,9 +357,12 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         const HullView& I = useB ? A : B;
         const Vec3* rv = useB ? vb : va;
         const Vec3* iv = useB ? va : vb;
-        Vec3 refN = A.normals[fr];
-        float refOff = A.offsets[fr];
-        if (useB) planeB(fr, refN, refOff);
+        Vec3 refN;
+        float refOff;
+        if (useB)
+            planeB(fr, refN, refOff);
+        else
+            refN = A.normals[fr], refOff = A.offsets[fr];
         std::uint32_t deepest = 0;
         float lowest = INFINITY;
         for (int i = 0; i < I.vertexCount; ++i) {
