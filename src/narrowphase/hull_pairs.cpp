@@ -54,7 +54,7 @@ struct HullView {
     const std::vector<float>* normalRows;  ///< HullAdjacency::normalRows
     const std::vector<float>* arcCones;    ///< HullAdjacency::arcCones
     const std::uint32_t* vertexFaceStart;  ///< HullAdjacency::vertexFaceStart
-    const std::uint32_t* vertexFaces;
+    const std::uint32_t* vertexFaces;      ///< HullAdjacency::vertexFaces
     Vec3 interior;
     float size;
     float inradius;
