@@ -142,10 +142,9 @@ struct WorldSettings {
     float manifoldReuseDistance = 0.001f;
     /// A pair of polytopes (hull-hull, box-hull) that touched last step makes its contact again from the feature
     /// that decided it (a reference face or an edge pair) without testing every axis, while that feature's
-    /// separation stays within this distance of what the full search found, and for at most 8 steps in a row; then
-    /// the search runs again. The contact may then come from a feature the search would have left for another up to
-    /// about this much shallower (Box3D keeps its SAT cache the same way, at its linear slop); 0 searches every pair
-    /// every step, m.
+    /// separation stays within this distance of what the full search found; then the search runs again. The contact
+    /// may then come from a feature the search would have left for another up to about this much shallower (Box3D
+    /// keeps its SAT cache the same way, at its linear slop); 0 searches every pair every step, m.
     float contactFeatureDrift = 0.005f;
     Integrator integrator = Integrator::SemiImplicitEuler;
     /// Effects the scene declares. The engine removes those the content cannot show (see World::activeEffects).

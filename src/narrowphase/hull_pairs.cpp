@@ -462,12 +462,9 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
             return false;
     }
     // Last call's contact feature (reference face or edge pair), when the pair touched: its contact is built again
-    // without the search while the feature's separation stays within featureDrift of what the search found, for at
-    // most kMaxFeatureReuses calls (Box3D's SAT cache keeps a feature the same way; the count bounds how long a
-    // turning body can keep a face that another has overtaken without its depth showing it). A feature that now
-    // separates the pair is an exact answer: no contact.
-    if (hint && !hint->separated && hint->kind != SatHint::kNone && featureDrift > 0 &&
-        hint->reuses < kMaxFeatureReuses) {
+    // without the search while the feature's separation stays within featureDrift of what the search found (Box3D's
+    // SAT cache keeps a feature the same way). A feature that now separates the pair is an exact answer: no contact.
+    if (hint && !hint->separated && hint->kind != SatHint::kNone && featureDrift > 0) {
         const SatHint last = *hint;
         const std::uint32_t face = last.a;
         float sep = -INFINITY;
@@ -482,7 +479,7 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
             const bool touching = last.kind == SatHint::kEdges ? edgeContact(last.a, last.b, axis)
                                                                : faceContact(last.kind == SatHint::kFaceB, last.a);
             if (touching) {
-                hint->reuses = static_cast<std::uint8_t>(last.reuses + 1);
+                hint->reuses = static_cast<std::uint8_t>(last.reuses < 255 ? last.reuses + 1 : 255);
                 return true;
             }
         }

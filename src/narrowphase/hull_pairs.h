@@ -115,21 +115,21 @@ HullAdjacency buildHullAdjacency(const ConvexHull& hull);
 ///   one axis. Every axis it can name is one the whole search tests too, with the same arithmetic, so the answer is
 ///   the same with or without it; only the time differs.
 /// - a contact feature, with a featureDrift above zero, makes the contact again without the search while the
-///   feature's separation stays within featureDrift of `separation` (what the search found), for at most
-///   kMaxFeatureReuses calls in a row; then, or when it drifts, the search runs again. This one trades exactness for
-///   time: the search could have chosen another feature, deeper by up to the drift (more after turning; see
-///   HullPairs.FeatureReuseStaysCloseToTheSearch). With featureDrift zero the answer is the search's, bit for bit.
+///   feature's separation stays within featureDrift of `separation` (what the search found); when it drifts the
+///   search runs again. This one trades exactness for time: the search could have chosen another feature, deeper by
+///   up to about the drift (HullPairs.FeatureReuseStaysCloseToTheSearch, HullPile.KeptContactFeaturesStandLikeThe
+///   FullSearch). There is no cap on how long a feature is kept: searching again every few steps made resting
+///   bodies jitter (the search would take a neighbouring feature and the contact jumped). With featureDrift zero the
+///   answer is the search's, bit for bit.
 /// A hint for other hulls (indices out of range) is ignored.
 struct SatHint {
     enum Kind : std::uint8_t { kNone, kFaceA, kFaceB, kEdges };
     Kind kind = kNone;
     bool separated = false;      ///< the axis separated the pair (else it made the contact)
-    std::uint8_t reuses = 0;     ///< contacts made from this feature since the search found it
+    std::uint8_t reuses = 0;     ///< contacts made from this feature since the search found it (up to 255)
     std::uint16_t a = 0, b = 0;  ///< face of A or of B (in `a`), or edge of A and edge of B
     float separation = 0;        ///< a contact feature's separation when the search found it
 };
-/// A contact feature is used at most this many calls in a row before the search checks it again.
-inline constexpr std::uint8_t kMaxFeatureReuses = 8;
 
 /// Contact manifold of hull A and hull B (posed by poseA / poseB). Returns false with out.pointCount = 0 when the
 /// hulls are farther apart than `margin` along some axis. Otherwise: normal A -> B, 1 to 4 points on B's surface
