@@ -448,40 +448,30 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         return true;
     };
 
+    // The separation along the hint's axis (for an edge pair, when it is still a face of the Minkowski difference
+    // apart by more than `limit`, and its unit axis); false when the hint names no axis of these hulls.
+    const auto hintSeparation = [&](const SatHint& h, float limit, float& sep, Vec3& axis) {
+        const std::uint32_t face = h.a;
+        if (h.kind == SatHint::kFaceA && h.a < A.faceCount) return separations(false, &face, 1, &sep), true;
+        if (h.kind == SatHint::kFaceB && h.a < B.faceCount) return separations(true, &face, 1, &sep), true;
+        return h.kind == SatHint::kEdges && h.a < A.edgeCount && h.b < B.edgeCount &&
+               edgeAxis(h.a, h.b, limit, axis, sep);
+    };
+    float hintSep = -INFINITY;
+    Vec3 hintAxis{};
     // Last call's separating axis first: one axis instead of the search, when the pair is still apart along it.
-    if (hint && hint->separated) {
-        const int a = hint->a, b = hint->b;
-        const std::uint32_t face = hint->a;
-        float sep = -INFINITY;
-        if (hint->kind == SatHint::kFaceA && a < A.faceCount) separations(false, &face, 1, &sep);
-        if (hint->kind == SatHint::kFaceB && a < B.faceCount) separations(true, &face, 1, &sep);
-        if (sep > margin) return false;
-        Vec3 axis;
-        if (hint->kind == SatHint::kEdges && a < A.edgeCount && b < B.edgeCount && edgeAxis(a, b, margin, axis, sep) &&
-            sep > margin)
-            return false;
-    }
+    if (hint && hint->separated && hintSeparation(*hint, margin, hintSep, hintAxis) && hintSep > margin) return false;
     // Last call's contact feature (reference face or edge pair), when the pair touched: its contact is built again
     // without the search while the feature's separation stays within featureDrift of what the search found (Box3D's
     // SAT cache keeps a feature the same way). A feature that now separates the pair is an exact answer: no contact.
-    if (hint && !hint->separated && hint->kind != SatHint::kNone && featureDrift > 0) {
+    if (hint && !hint->separated && featureDrift > 0 && hintSeparation(*hint, -INFINITY, hintSep, hintAxis)) {
         const SatHint last = *hint;
-        const std::uint32_t face = last.a;
-        float sep = -INFINITY;
-        Vec3 axis{};
-        bool valid = false;
-        if (last.kind == SatHint::kFaceA && last.a < A.faceCount) separations(false, &face, 1, &sep), valid = true;
-        if (last.kind == SatHint::kFaceB && last.a < B.faceCount) separations(true, &face, 1, &sep), valid = true;
-        if (last.kind == SatHint::kEdges && last.a < A.edgeCount && last.b < B.edgeCount)
-            valid = edgeAxis(last.a, last.b, -INFINITY, axis, sep);
-        if (valid && sep > margin) return separatedBy(last.kind, last.a, last.b);
-        if (valid && std::fabs(sep - last.separation) <= featureDrift) {
-            const bool touching = last.kind == SatHint::kEdges ? edgeContact(last.a, last.b, axis)
-                                                               : faceContact(last.kind == SatHint::kFaceB, last.a);
-            if (touching) {
-                hint->reuses = static_cast<std::uint8_t>(last.reuses < 255 ? last.reuses + 1 : 255);
-                return true;
-            }
+        if (hintSep > margin) return separatedBy(last.kind, last.a, last.b);
+        if (std::fabs(hintSep - last.separation) <= featureDrift &&
+            (last.kind == SatHint::kEdges ? edgeContact(last.a, last.b, hintAxis)
+                                          : faceContact(last.kind == SatHint::kFaceB, last.a))) {
+            hint->reuses = static_cast<std::uint8_t>(last.reuses < 255 ? last.reuses + 1 : 255);
+            return true;
         }
     }
     if (hint) *hint = {};
