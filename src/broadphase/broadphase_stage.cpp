@@ -139,6 +139,12 @@ void BroadPhaseStage::staticFilterChanged(std::uint32_t slot, std::uint32_t cate
     staticMask_[slot] = mask;
 }
 
+const std::uint32_t* BroadPhaseStage::movingInCellOrder(const BodyStorage& storage) const {
+    const bool current = lastKind_ == BroadPhaseKind::Grid && layoutAtLastCall_ == storage.layoutChanges() &&
+                         grid_->boxesInCellOrder().size() == storage.moving.size();
+    return current ? grid_->boxesInCellOrder().data() : nullptr;
+}
+
 std::uint32_t BroadPhaseStage::staticPrimitiveCount() const { return bvh_->primitiveCount(); }
 
 const StaticBvh& BroadPhaseStage::staticBvh(TaskPool& pool) {
@@ -187,6 +193,7 @@ void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage
     // A switch loses SAP's kept order; it is rebuilt from scratch the next time SAP runs.
     if (kind != lastKind_ && lastKind_ == BroadPhaseKind::SweepAndPrune) sap_->reset();
     lastKind_ = kind;
+    layoutAtLastCall_ = storage.layoutChanges();
     sortPairs(out.moving, pool);
 
     if (!bvh_->empty() && moving.size() > 0) {

@@ -87,6 +87,9 @@ public:
 
     /// The algorithm the last call used for moving-moving pairs.
     BroadPhaseKind lastKind() const { return lastKind_; }
+    /// The moving bodies in the grid's cell order, when the last call ran the grid and no body was added or removed
+    /// since (else null): an order of the storage that keeps bodies near in space near in memory.
+    const std::uint32_t* movingInCellOrder(const BodyStorage& storage) const;
     /// The grid as the last step that ran it left it (read-only, for debug drawing; lastKind() says whether that
     /// was the last step).
     const MultiResolutionGrid& grid() const { return *grid_; }
@@ -100,6 +103,7 @@ private:
     std::unique_ptr<MultiResolutionGrid> grid_;
     std::unique_ptr<StaticBvh> bvh_;
     BroadPhaseKind lastKind_ = BroadPhaseKind::SweepAndPrune;
+    std::uint64_t layoutAtLastCall_ = 0;  ///< BodyStorage::layoutChanges() when findPairs last ran
     BroadPhaseTimer timer_;
     bool estimated_ = false;
     bool estimateDecisive_ = false;

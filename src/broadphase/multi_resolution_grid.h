@@ -50,6 +50,9 @@ public:
     /// once. Not sorted; identical for every thread count.
     void findPairs(const Bounds& bounds, const PairFilter& filter, TaskPool& pool, std::vector<BodyPair>& out);
 
+    /// The boxes of the last findPairs in cell order (level, z, y, x; boxes with a non-finite bound last): boxes
+    /// that are near in space are near in this order. A permutation of 0 .. size - 1 of that call's boxes.
+    const AlignedVector<std::uint32_t>& boxesInCellOrder() const { return slotBody_; }
     /// Levels that held at least one body in the last findPairs.
     int levelCount() const { return occupiedLevelCount_; }
     /// Cells that held at least one body in the last findPairs.

@@ -2,6 +2,9 @@
 
 #include <cassert>
 #include <type_traits>
+#include <utility>
+
+#include "core/parallel.h"
 
 namespace rubble::detail {
 namespace {
@@ -123,6 +126,37 @@ void BodyStorage::release(BodyId id) {
         slot.set == BodySet::Moving ? moving.swapRemove(slot.dense) : statics.swapRemove(slot.dense);
     if (moved != ~0u) slots_[moved].dense = slot.dense;
     ids_.release(id.index);
+}
+
+void BodyStorage::reorderMoving(const std::uint32_t* order, TaskPool& pool) {
+    const std::size_t n = moving.size();
+    // Sized so that each worker's share of one array is a few pages: the reads follow `order`, the writes stream.
+    constexpr std::size_t kChunk = 16384;
+    ReorderScratch& scratch = reorderScratch_;
+    const auto spareFor = [&](auto& array) -> auto& {
+        using Array = std::remove_reference_t<decltype(array)>;
+        if constexpr (std::is_same_v<Array, AlignedVector<float>>)
+            return scratch.floats;
+        else if constexpr (std::is_same_v<Array, std::vector<std::uint32_t>>)
+            return scratch.words;
+        else if constexpr (std::is_same_v<Array, std::vector<std::uint64_t>>)
+            return scratch.longs;
+        else
+            return scratch.bytes;
+    };
+    forEachArray(moving, [&](auto& array) {
+        auto& spare = spareFor(array);
+        static_assert(
+            std::is_same_v<std::remove_reference_t<decltype(spare)>, std::remove_reference_t<decltype(array)>>);
+        spare.resize(n);
+        pool.forChunks(n, kChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+            for (std::size_t k = begin; k < end; ++k) spare[k] = array[order[k]];
+        });
+        // The old array becomes the spare for the next array of its type.
+        std::swap(array, spare);
+    });
+    for (std::uint32_t k = 0; k < n; ++k) slots_[moving.slot[k]].dense = k;
+    ++layoutChanges_;
 }
 
 const BodySlot* BodyStorage::find(BodyId id) const { return ids_.contains(id) ? &slots_[id.index] : nullptr; }

@@ -14,6 +14,8 @@
 
 namespace rubble::detail {
 
+class TaskPool;
+
 enum BodyFlags : std::uint8_t {
     kFlagKinematic = 1u << 0,
     kFlagFrozen = 1u << 1,   ///< state went non-finite; no longer simulated
@@ -95,14 +97,28 @@ public:
     bool alive(std::uint32_t slot) const { return ids_.alive(slot); }
     /// The handle of the body in `slot` (its last body when the slot is free).
     BodyId idAt(std::uint32_t slot) const { return ids_.idAt(slot); }
-    /// Counts the bodies added and removed: while it stays the same, every dense index names the same body.
+    /// Counts the bodies added and removed and the reorders: while it stays the same, every dense index names the same
+    /// body.
     std::uint64_t layoutChanges() const { return layoutChanges_; }
+    /// Puts the moving bodies in a new order: row k becomes the body that is at row order[k] now (`order` is a
+    /// permutation of 0 .. moving.size() - 1). Every handle keeps its body; dense indices change, which
+    /// layoutChanges() counts. Used to keep bodies that are near in space near in memory (World::step).
+    void reorderMoving(const std::uint32_t* order, TaskPool& pool);
     /// Debug aid (RUBBLE_VALIDATE): every live slot points at a row that points back, every array has the
     /// set's length. Returns a description of the first broken invariant, or an empty string.
     std::string checkInvariants() const;
 
 private:
+    /// One spare array per element type: reorderMoving gathers into it and swaps it with the array.
+    struct ReorderScratch {
+        AlignedVector<float> floats;
+        std::vector<std::uint32_t> words;
+        std::vector<std::uint64_t> longs;
+        std::vector<std::uint8_t> bytes;
+    };
+
     SlotMap<BodyId> ids_;
+    ReorderScratch reorderScratch_;
     std::vector<BodySlot> slots_;
     std::uint64_t layoutChanges_ = 0;
 };

@@ -47,6 +47,21 @@ detail::SolverParts solverParts(World::Impl& w) {
     return {w.contactSolver, w.jointSolver, w.joints, w.jointCoupling, w.bodies, w.islands};
 }
 
+/// Large worlds keep their moving bodies in the grid's cell order of the last step, renewed every period: the
+/// order only decides where rows live, so it costs one pass over the storage and saves cache misses in every stage
+/// after it. Runs before anything of this step reads a dense index; a result depends on it only through the order
+/// of pairs, which is the same on every thread count.
+void keepBodiesInSpatialOrder(World::Impl& w, StepContext& step) {
+    if (w.bodies.moving.size() < w.spatialOrderFrom) return;
+    if (w.spatiallyOrdered && ++w.stepsSinceSpatialOrder < w.spatialOrderPeriod) return;
+    const std::uint32_t* order = w.broadPhase.movingInCellOrder(w.bodies);
+    if (order == nullptr) return;
+    const auto timer = step.time(Stage::BroadPhase);
+    w.bodies.reorderMoving(order, step.pool);
+    w.stepsSinceSpatialOrder = 0;
+    w.spatiallyOrdered = true;
+}
+
 /// Continuous collision sweeps each fast body from where it starts the step to where the substeps leave it.
 void startContinuousCollision(World::Impl& w, StepContext& step) {
     if (!step.continuous) return;
@@ -244,6 +259,7 @@ void World::step(float dt) {
     StepContext step(w.settings, w.effects, *w.pool, w.profile, w.origin);
     planStep(w, step, dt);
 
+    keepBodiesInSpatialOrder(w, step);
     startContinuousCollision(w, step);
     for (step.substep = 0; step.substep < step.substeps; ++step.substep) {
         integrateVelocities(w, step);

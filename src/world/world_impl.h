@@ -81,6 +81,15 @@ struct World::Impl {
     /// The scene queries' trees (src/query/); told of every body added, removed or moved outside the step.
     detail::QueryCache queries;
 
+    /// Bodies are put in the broad-phase grid's cell order from this many moving bodies on, every
+    /// spatialOrderPeriod steps: once their arrays outgrow the caches, every stage that gathers the bodies of a
+    /// pair (narrow phase, solver, the grid's own gather) then reads neighbouring rows instead of random ones.
+    /// Members, not constants, so that tests can order small worlds.
+    std::uint32_t spatialOrderFrom = 200000;
+    std::uint32_t spatialOrderPeriod = 64;
+    std::uint32_t stepsSinceSpatialOrder = 0;
+    bool spatiallyOrdered = false;  ///< false until the first order: a world created in random order waits no period
+
     Profile profile;
     std::uint64_t steps = 0;
     detail::Clock::time_point origin = detail::Clock::now();
