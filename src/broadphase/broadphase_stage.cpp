@@ -182,7 +182,12 @@ void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage
     }
     const auto searchBegin = std::chrono::steady_clock::now();
     if (kind == BroadPhaseKind::Grid) {
-        grid_->findPairs(moving, filter, pool, out.moving);
+        RowContinuity continuity = RowContinuity::None;
+        if (lastKind_ == BroadPhaseKind::Grid && storage.layoutChanges() == layoutAtLastCall_)
+            continuity = RowContinuity::SameRows;
+        else if (lastKind_ == BroadPhaseKind::Grid && storage.layoutChanges() == layoutInCellOrder_)
+            continuity = RowContinuity::InCellOrder;
+        grid_->findPairs(moving, filter, pool, out.moving, continuity);
     } else {
         sap_->findPairs(moving, bodies.slot.data(), static_cast<std::uint32_t>(storage.slots().size()), filter, pool,
                         out.moving);

@@ -90,6 +90,9 @@ public:
     /// The moving bodies in the grid's cell order, when the last call ran the grid and no body was added or removed
     /// since (else null): an order of the storage that keeps bodies near in space near in memory.
     const std::uint32_t* movingInCellOrder(const BodyStorage& storage) const;
+    /// The storage was just put in movingInCellOrder()'s order: the grid's next search may re-sort only the bodies
+    /// that change cell.
+    void movingPutInCellOrder(const BodyStorage& storage) { layoutInCellOrder_ = storage.layoutChanges(); }
     /// The grid as the last step that ran it left it (read-only, for debug drawing; lastKind() says whether that
     /// was the last step).
     const MultiResolutionGrid& grid() const { return *grid_; }
@@ -103,7 +106,8 @@ private:
     std::unique_ptr<MultiResolutionGrid> grid_;
     std::unique_ptr<StaticBvh> bvh_;
     BroadPhaseKind lastKind_ = BroadPhaseKind::SweepAndPrune;
-    std::uint64_t layoutAtLastCall_ = 0;  ///< BodyStorage::layoutChanges() when findPairs last ran
+    std::uint64_t layoutAtLastCall_ = 0;                   ///< BodyStorage::layoutChanges() when findPairs last ran
+    std::uint64_t layoutInCellOrder_ = ~std::uint64_t{0};  ///< ... right after the storage took the grid's order
     BroadPhaseTimer timer_;
     bool estimated_ = false;
     bool estimateDecisive_ = false;

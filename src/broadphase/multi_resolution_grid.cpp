@@ -26,10 +26,26 @@ constexpr std::size_t kBoxStride = 8;  // floats per body record: one 32-byte ha
 // reads per body cost six misses; copying each box into one record during the key pass (sequential) leaves one.
 // Below it, the copy costs more than it saves.
 constexpr std::uint32_t kRecordsFrom = 200000;
+// ... unless the rows are already near their slots (the world keeps large worlds in cell order): a read within this
+// many rows of the slot finds its cache lines still loaded from its neighbours' reads, so the gather needs no records
+// when three quarters of the last gather's reads were that near.
+constexpr std::uint32_t kNearRows = 8192;
 // The binning cell is larger than the level's extent bound by this factor, so that rounding can never put two
 // touching bodies of one level two cells apart: extents are float differences (a true extent exceeds its rounded
 // value by at most 2^-24 of it), centres and cell coordinates doubles (relative error ~1e-16).
 constexpr double kBinMargin = 1e-6;
+// From this many boxes on, the grid keeps its layout (origin, levels, key widths) while the boxes fit it, and when the
+// caller vouches for the rows (RowContinuity), re-sorts only the boxes that changed cell and merges them into the
+// rest: ~3-10% of a sparse world's bodies change cell per step, and the radix sort of all keys was a fifth of the
+// 1M-sphere world's step. Below it the full sort is cheap, and the layout fits each step's boxes as tightly as they
+// allow.
+constexpr std::uint32_t kIncrementalFrom = 65536;
+// A layout kept from step to step gets room to keep: the largest box may grow by this fraction, and the centres may
+// move this fraction of the span (and at least kOriginRoomCells finest cells) beyond either side, before it is
+// built again.
+constexpr double kExtentRoom = 1.0 / 32.0;
+constexpr double kSpanRoom = 1.0 / 16.0;
+constexpr double kOriginRoomCells = 8.0;
 // Slack, in cells, on the coarse-level query ranges for the same reason.
 constexpr double kQuerySlack = 1e-6;
 // Boxes with a non-finite bound get this key: they sort after every cell and are tested against everything.
@@ -176,10 +192,11 @@ void MultiResolutionGrid::computeStats(const Bounds& b, TaskPool& pool) {
     });
 }
 
-void MultiResolutionGrid::computeKeys(const Bounds& b, const Layout& layout, TaskPool& pool) {
+void MultiResolutionGrid::computeKeys(const Bounds& b, const Layout& layout, AlignedVector<std::uint64_t>& keys,
+                                      TaskPool& pool) {
     const std::size_t n = b.size();
-    items_.resize(n);
-    const bool records = n >= kRecordsFrom;
+    keys.resize(n);
+    const bool records = records_;
     if (records) boxes_.resize(n * kBoxStride);
     const int top = levelTotal_ - 1;
     // One bit above every cell key: outliers sort after all cells.
@@ -203,9 +220,76 @@ void MultiResolutionGrid::computeKeys(const Bounds& b, const Layout& layout, Tas
                     cell[a] = layout.cell((0.5 * (double{lo[a]} + double{hi[a]}) - origin_[a]) * levelInvBin_[level]);
                 key = layout.pack(level, cell[0], cell[1], cell[2]);
             }
-            items_[i] = key << layout.indexBits | i;
+            keys[i] = key << layout.indexBits | i;
         }
     });
+}
+
+void MultiResolutionGrid::resortChangedCells(const Layout& layout, RowContinuity continuity, TaskPool& pool) {
+    const std::size_t n = items_.size();
+    const int indexBits = layout.indexBits;
+    const std::uint64_t indexMask = (std::uint64_t{1} << indexBits) - 1;
+    const bool sameRows = continuity == RowContinuity::SameRows;
+    const std::size_t chunks = TaskPool::chunkCount(n, kBodyChunk);
+    chunkKept_.resize(chunks);
+    chunkMoved_.resize(chunks);
+    kept_.resize(n);
+    moved_.resize(n);
+    // 1. Last step's sorted items in order: a box whose cell is the same keeps its place relative to the others that
+    //    stayed (the same key, and a row that is the same or, in cell order, the slot itself: both ascending), so
+    //    each chunk's stayers are already sorted, and all of one chunk's come before the next chunk's.
+    pool.forChunks(n, kBodyChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
+        std::uint64_t* kept = kept_.data() + begin;
+        std::uint64_t* moved = moved_.data() + begin;
+        std::uint32_t keptCount = 0, movedCount = 0;
+        for (std::size_t s = begin; s < end; ++s) {
+            const std::uint64_t previous = items_[s];
+            const std::uint64_t item = bodyKeys_[sameRows ? previous & indexMask : s];
+            if ((item >> indexBits) == (previous >> indexBits))
+                kept[keptCount++] = item;
+            else
+                moved[movedCount++] = item;
+        }
+        chunkKept_[chunk] = keptCount;
+        chunkMoved_[chunk] = movedCount;
+    });
+    // 2. The boxes that changed cell, gathered and sorted alone.
+    std::size_t movedTotal = 0;
+    for (std::size_t c = 0; c < chunks; ++c) {
+        const std::size_t begin = c * kBodyChunk;
+        std::copy_n(moved_.data() + begin, chunkMoved_[c], moved_.data() + movedTotal);
+        movedTotal += chunkMoved_[c];
+    }
+    radixSortBits(moved_.data(), movedTotal, indexBits, static_cast<int>(layout.keyBits), sortScratch_, pool);
+    // 3. Merged, one chunk of stayers at a time: the changed boxes that go between a chunk's first stayer and the
+    //    next chunk's are found by binary search (items are unique: they carry the row).
+    chunkMovedBegin_.resize(chunks + 1);
+    std::size_t movedAt = 0;
+    for (std::size_t c = 0; c < chunks; ++c) {
+        if (chunkKept_[c] > 0 && movedAt < movedTotal) {
+            const std::uint64_t first = kept_[c * kBodyChunk];
+            movedAt = static_cast<std::size_t>(
+                std::lower_bound(moved_.data() + movedAt, moved_.data() + movedTotal, first) - moved_.data());
+        }
+        // The first chunk also takes every changed box before its first stayer.
+        chunkMovedBegin_[c] = c == 0 ? 0 : static_cast<std::uint32_t>(movedAt);
+    }
+    chunkMovedBegin_[chunks] = static_cast<std::uint32_t>(movedTotal);
+    // An empty chunk of stayers leaves its changed boxes to the next chunk's merge, so no range is taken twice.
+    for (std::size_t c = chunks; c-- > 1;)
+        if (chunkKept_[c] == 0) chunkMovedBegin_[c] = chunkMovedBegin_[c + 1];
+    chunkKeptBegin_.resize(chunks);
+    for (std::size_t c = 0, total = 0; c < chunks; total += chunkKept_[c], ++c)
+        chunkKeptBegin_[c] = static_cast<std::uint32_t>(total);
+    pool.forChunks(n, kBodyChunk, [&](std::size_t chunk, std::size_t begin, std::size_t, int) {
+        const std::size_t keptBefore = chunkKeptBegin_[chunk];
+        const std::uint64_t* k = kept_.data() + begin;
+        const std::uint64_t* kEnd = k + chunkKept_[chunk];
+        const std::uint64_t* m = moved_.data() + chunkMovedBegin_[chunk];
+        const std::uint64_t* mEnd = moved_.data() + chunkMovedBegin_[chunk + 1];
+        std::merge(k, kEnd, m, mEnd, items_.data() + keptBefore + chunkMovedBegin_[chunk]);
+    });
+    changedCells_ = static_cast<std::uint32_t>(movedTotal);
 }
 
 void MultiResolutionGrid::gatherAndBuildRows(const Bounds& b, const Layout& layout, std::uint32_t validCount,
@@ -225,12 +309,13 @@ void MultiResolutionGrid::gatherAndBuildRows(const Bounds& b, const Layout& layo
     const std::uint64_t indexMask = (std::uint64_t{1} << layout.indexBits) - 1;
     const std::uint64_t* items = items_.data();
     const float* boxes = boxes_.data();
-    const bool records = n >= kRecordsFrom;
+    const bool records = records_;
     const std::size_t chunks = TaskPool::chunkCount(n, kBodyChunk);
     chunkRowCount_.resize(chunks);
     chunkCells_.resize(chunks);
+    chunkFarReads_.resize(chunks);
     pool.forChunks(n, kBodyChunk, [&](std::size_t chunk, std::size_t begin, std::size_t end, int) {
-        std::uint32_t rows = 0;
+        std::uint32_t rows = 0, farReads = 0;
         CellRuns runs;
         std::size_t runStart = begin;
         for (std::size_t s = begin; s < end; ++s) {
@@ -249,6 +334,7 @@ void MultiResolutionGrid::gatherAndBuildRows(const Bounds& b, const Layout& layo
             }
             slotBody_[s] = i;
             slotX_[s] = layout.x(item >> cellShift);
+            farReads += static_cast<std::uint32_t>(i + kNearRows < s || s + kNearRows < i);
             if (s >= validCount) continue;
             rows += static_cast<std::uint32_t>(s == 0 || (item >> rowShift) != (items[s - 1] >> rowShift));
             if (s == 0 || (item >> cellShift) != (items[s - 1] >> cellShift)) {
@@ -264,7 +350,11 @@ void MultiResolutionGrid::gatherAndBuildRows(const Bounds& b, const Layout& layo
                                                    std::min<std::size_t>(begin, validCount));
         chunkRowCount_[chunk] = rows;
         chunkCells_[chunk] = runs;
+        chunkFarReads_[chunk] = farReads;
     });
+    std::size_t farReads = 0;
+    for (std::uint32_t f : chunkFarReads_) farReads += f;
+    gatherWasLocal_ = 4 * farReads < n;
     // Prefix sums of the row starts; cell runs that straddle chunk boundaries are joined here.
     std::uint32_t rows = 0, cells = 0, open = 0, maxRun = 0;
     for (std::size_t c = 0; c < chunks; ++c) {
@@ -472,8 +562,20 @@ void MultiResolutionGrid::queryOutliers(std::uint32_t validCount, const PairFilt
             }
 }
 
+bool MultiResolutionGrid::layoutStillFits(std::uint32_t n, std::uint32_t outliers, double extentMax,
+                                          const double (&centreMin)[3], const double (&centreMax)[3]) const {
+    if (n != lastCount_ || outliers > 0 || lastHadOutliers_ || cellAxisBits_ == 0) return false;
+    const double top = levelSize_[levelTotal_ - 1];
+    // Boxes that shrank to under half the top level would be binned in cells too coarse for them.
+    if (!(extentMax <= top) || extentMax < 0.5 * top) return false;
+    const double reach = static_cast<double>((1u << cellAxisBits_) - 1);
+    for (int a = 0; a < 3; ++a)
+        if (!(centreMin[a] >= origin_[a]) || !((centreMax[a] - origin_[a]) * levelInvBin_[0] < reach)) return false;
+    return true;
+}
+
 void MultiResolutionGrid::findPairs(const Bounds& bounds, const PairFilter& filter, TaskPool& pool,
-                                    std::vector<BodyPair>& out) {
+                                    std::vector<BodyPair>& out, RowContinuity continuity) {
     out.clear();
     const std::uint32_t n = bounds.size();
     occupiedLevelCount_ = 0;
@@ -502,20 +604,32 @@ void MultiResolutionGrid::findPairs(const Bounds& bounds, const PairFilter& filt
     // into cells `ratio` times too large.
     Layout layout;
     layout.indexBits = n > 1 ? static_cast<int>(std::bit_width(n - 1)) : 1;
-    levelTotal_ = 1;
-    if (validCount > 0) {
-        double size = extentMax > 0.0 ? extentMax : 1.0;  // all points: any cell size works
+    const bool large = n >= kIncrementalFrom;
+    incremental_ =
+        continuity != RowContinuity::None && large && layoutStillFits(n, outliers, extentMax, centreMin, centreMax);
+    if (incremental_) {
+        layout.axisBits = cellAxisBits_;
+        layout.maxCoord = (1u << layout.axisBits) - 1;
+        layout.keyBits = static_cast<std::uint32_t>(3 * layout.axisBits + lastLevelBits_);
+    } else if (validCount > 0) {
+        levelTotal_ = 1;
+        // A large grid's layout is kept while it fits, so it gets room: a top level a little above the largest box,
+        // and a span a little beyond the centres.
+        const double top = (extentMax > 0.0 ? extentMax : 1.0) * (large ? 1.0 + kExtentRoom : 1.0);
+        double size = top;  // all points: any cell size works
         while (levelTotal_ < kMaxLevels && size / levelRatio_ >= extentMin && size / levelRatio_ > 0.0) {
             size /= levelRatio_;
             ++levelTotal_;
         }
-        levelSize_[levelTotal_ - 1] = extentMax > 0.0 ? extentMax : 1.0;
+        levelSize_[levelTotal_ - 1] = top;
         for (int l = levelTotal_ - 2; l >= 0; --l) levelSize_[l] = levelSize_[l + 1] / levelRatio_;
         for (int l = 0; l < levelTotal_; ++l) levelInvBin_[l] = 1.0 / (levelSize_[l] * (1.0 + kBinMargin));
         double span = 0.0;
         for (int a = 0; a < 3; ++a) {
-            origin_[a] = centreMin[a];
-            span = std::max(span, (centreMax[a] - centreMin[a]) * levelInvBin_[0]);
+            const double room =
+                large ? std::max(kSpanRoom * (centreMax[a] - centreMin[a]), kOriginRoomCells * levelSize_[0]) : 0.0;
+            origin_[a] = centreMin[a] - room;
+            span = std::max(span, (centreMax[a] - centreMin[a] + 2.0 * room) * levelInvBin_[0]);
         }
         // The key, one outlier bit above it and the body index share one 64-bit sort item.
         const int levelBits = static_cast<int>(std::bit_width(static_cast<std::uint32_t>(levelTotal_ - 1)));
@@ -524,16 +638,30 @@ void MultiResolutionGrid::findPairs(const Bounds& bounds, const PairFilter& filt
         layout.axisBits = static_cast<int>(std::bit_width(static_cast<std::uint32_t>(maxCoord)));
         layout.maxCoord = (1u << layout.axisBits) - 1;
         layout.keyBits = static_cast<std::uint32_t>(3 * layout.axisBits + levelBits);
+        lastLevelBits_ = levelBits;
+    } else {
+        levelTotal_ = 1;
+        lastLevelBits_ = 0;
     }
 
     cellAxisBits_ = layout.axisBits;
     cellIndexBits_ = layout.indexBits;
     validCount_ = validCount;
+    lastCount_ = n;
+    lastHadOutliers_ = outliers > 0;
+    records_ = n >= kRecordsFrom && !gatherWasLocal_;
 
-    // 2-4. Keys, sort, gather, rows. Equal keys keep index order (the sort is stable), so slots are deterministic.
-    computeKeys(bounds, layout, pool);
-    radixSortBits(items_.data(), n, layout.indexBits, static_cast<int>(layout.keyBits) + (outliers > 0 ? 1 : 0),
-                  sortScratch_, pool);
+    // 2-4. Keys, sort, gather, rows. Equal keys keep index order (the sort is stable, the merge compares the
+    // index too), so slots are deterministic.
+    if (incremental_) {
+        computeKeys(bounds, layout, bodyKeys_, pool);
+        resortChangedCells(layout, continuity, pool);
+    } else {
+        computeKeys(bounds, layout, items_, pool);
+        radixSortBits(items_.data(), n, layout.indexBits, static_cast<int>(layout.keyBits) + (outliers > 0 ? 1 : 0),
+                      sortScratch_, pool);
+        changedCells_ = n;
+    }
     gatherAndBuildRows(bounds, layout, validCount, pool);
     const int rowLevelShift = 2 * layout.axisBits;
     for (int l = 0; l <= levelTotal_; ++l)

@@ -37,6 +37,13 @@ namespace rubble::detail {
 
 class TaskPool;
 
+/// What the caller knows of the boxes' rows since the grid's last findPairs.
+enum class RowContinuity : std::uint8_t {
+    None,         ///< rows were added, removed or moved otherwise
+    SameRows,     ///< every row holds the same body's box as in the last call
+    InCellOrder,  ///< the rows were put in the last call's cell order (boxesInCellOrder()) and nothing else changed
+};
+
 class MultiResolutionGrid {
 public:
     /// Levels cover sizes from the largest box down by factors of levelRatio, at most this many of them; boxes
@@ -47,8 +54,14 @@ public:
     explicit MultiResolutionGrid(float levelRatio = 4.0f);
 
     /// Appends to `out` (cleared first) every pair a < b of boxes that overlap and that the filter accepts, each
-    /// once. Not sorted; identical for every thread count.
-    void findPairs(const Bounds& bounds, const PairFilter& filter, TaskPool& pool, std::vector<BodyPair>& out);
+    /// once. Not sorted; identical for every thread count. With `continuity`, a large grid whose layout still fits
+    /// re-sorts only the boxes that changed cell since the last call; the pairs are the same either way.
+    void findPairs(const Bounds& bounds, const PairFilter& filter, TaskPool& pool, std::vector<BodyPair>& out,
+                   RowContinuity continuity = RowContinuity::None);
+    /// Boxes that changed cell in the last findPairs, when it re-sorted only those (else every box was sorted).
+    std::uint32_t changedCells() const { return changedCells_; }
+    /// Whether the last findPairs re-sorted only the boxes that changed cell.
+    bool lastSortWasIncremental() const { return incremental_; }
 
     /// The boxes of the last findPairs in cell order (level, z, y, x; boxes with a non-finite bound last): boxes
     /// that are near in space are near in this order. A permutation of 0 .. size - 1 of that call's boxes.
@@ -117,7 +130,14 @@ private:
     struct Layout;
 
     void computeStats(const Bounds& bounds, TaskPool& pool);
-    void computeKeys(const Bounds& bounds, const Layout& layout, TaskPool& pool);
+    /// Whether the last call's layout still holds these boxes: every box within the top level's size (which keeps
+    /// the grid exact) and every centre inside the keyed span (which keeps cells from crowding at its edge).
+    bool layoutStillFits(std::uint32_t n, std::uint32_t outliers, double extentMax, const double (&centreMin)[3],
+                         const double (&centreMax)[3]) const;
+    void computeKeys(const Bounds& bounds, const Layout& layout, AlignedVector<std::uint64_t>& keys, TaskPool& pool);
+    /// items_ holds last call's sorted items and bodyKeys_ this call's, in row order: sorts the items of the boxes
+    /// that changed cell and merges them with the rest into items_.
+    void resortChangedCells(const Layout& layout, RowContinuity continuity, TaskPool& pool);
     void gatherAndBuildRows(const Bounds& bounds, const Layout& layout, std::uint32_t validCount, TaskPool& pool);
     void buildCoarseTable(const Layout& layout, std::uint32_t validCount);
     void queryRows(const Layout& layout, const PairFilter& filter, TaskPool& pool);
@@ -143,6 +163,9 @@ private:
     AlignedVector<std::uint32_t> slotBody_;  ///< body index of each slot
     AlignedVector<std::uint32_t> slotX_;     ///< x cell of each slot
     std::vector<std::uint32_t> chunkRowCount_;
+    std::vector<std::uint32_t> chunkFarReads_;  ///< per chunk of the gather: reads far from their slot
+    bool records_ = false;                      ///< this call copies boxes into records for the gather
+    bool gatherWasLocal_ = false;               ///< the last gather read mostly near its slots
     std::vector<CellRuns> chunkCells_;
     AlignedVector<std::uint64_t> rowKey_;     ///< (level, z, y) of each row, then sentinels
     AlignedVector<std::uint32_t> rowBegin_;   ///< first slot of each row; rowBegin_[rowCount_] = valid slots
@@ -151,6 +174,16 @@ private:
     std::uint64_t tableMask_ = 0;
     int tableShift_ = 64;
     std::vector<ChunkOutput> chunkOutputs_;
+    // The incremental re-sort: this call's items in row order, the stayers and movers of each chunk.
+    AlignedVector<std::uint64_t> bodyKeys_;
+    AlignedVector<std::uint64_t> kept_;
+    AlignedVector<std::uint64_t> moved_;
+    std::vector<std::uint32_t> chunkKept_, chunkKeptBegin_, chunkMoved_, chunkMovedBegin_;
+    std::uint32_t changedCells_ = 0;
+    bool incremental_ = false;
+    std::uint32_t lastCount_ = 0;  ///< boxes in the last call, and whether any was an outlier
+    bool lastHadOutliers_ = false;
+    int lastLevelBits_ = 0;
 
     std::uint32_t rowCount_ = 0;
     std::uint32_t cellCount_ = 0;

@@ -58,6 +58,7 @@ void keepBodiesInSpatialOrder(World::Impl& w, StepContext& step) {
     if (order == nullptr) return;
     const auto timer = step.time(Stage::BroadPhase);
     w.bodies.reorderMoving(order, step.pool);
+    w.broadPhase.movingPutInCellOrder(w.bodies);
     w.stepsSinceSpatialOrder = 0;
     w.spatiallyOrdered = true;
 }

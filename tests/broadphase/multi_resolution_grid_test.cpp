@@ -287,6 +287,89 @@ TEST(MultiResolutionGrid, MovingSceneWithInsertionsAndRemovals) {
     }
 }
 
+/// The exact pairs by a sweep along x: an answer that shares nothing with the grid, fast enough for large sets.
+std::vector<BodyPair> sweptPairs(const Bounds& b) {
+    std::vector<std::uint32_t> order(b.size());
+    for (std::uint32_t i = 0; i < b.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) { return b.minX[x] < b.minX[y]; });
+    std::vector<BodyPair> out;
+    for (std::size_t k = 0; k < order.size(); ++k)
+        for (std::size_t l = k + 1; l < order.size() && b.minX[order[l]] <= b.maxX[order[k]]; ++l)
+            if (overlaps(b, order[k], b, order[l]))
+                out.push_back({std::min(order[k], order[l]), std::max(order[k], order[l])});
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+TEST(MultiResolutionGrid, IncrementalSortFindsWhatAFullSortFinds) {
+    // A large sparse cloud stepped as a world steps it: most steps the rows are the same bodies (only the boxes that
+    // changed cell are re-sorted and merged), once they are put in the grid's cell order, once a body is removed
+    // (the rows no longer match: sort from scratch), once a box outgrows the layout and once one flies off its span
+    // (the layout is built again). Every step must give the pairs of a grid that sorts everything from scratch.
+    TaskPool pool(2);
+    MultiResolutionGrid grid, fresh;
+    constexpr std::uint32_t kBoxes = 70000;  // above the grid's incremental threshold
+    std::mt19937 rng(21);
+    const float half = 0.5f * std::cbrt(80.0f * kBoxes);  // S4's density of unit spheres
+    std::uniform_real_distribution<float> at(-half, half), speed(-0.15f, 0.15f);
+    Bounds b;
+    std::vector<float> vx, vy, vz;
+    for (std::uint32_t i = 0; i < kBoxes; ++i) {
+        pushCube(b, at(rng), at(rng), at(rng), 0.55f);
+        vx.push_back(speed(rng)), vy.push_back(speed(rng)), vz.push_back(speed(rng));
+    }
+    std::uint32_t incrementalSteps = 0;
+    for (int step = 0; step < 14; ++step) {
+        RowContinuity continuity = step == 0 ? RowContinuity::None : RowContinuity::SameRows;
+        if (step == 5) {
+            // Rows into the last call's cell order, velocities with them.
+            const AlignedVector<std::uint32_t> order = grid.boxesInCellOrder();
+            Bounds sorted;
+            sorted.resize(b.size());
+            std::vector<float> ux(b.size()), uy(b.size()), uz(b.size());
+            for (std::uint32_t k = 0; k < b.size(); ++k) {
+                const std::uint32_t i = order[k];
+                sorted.minX[k] = b.minX[i], sorted.minY[k] = b.minY[i], sorted.minZ[k] = b.minZ[i];
+                sorted.maxX[k] = b.maxX[i], sorted.maxY[k] = b.maxY[i], sorted.maxZ[k] = b.maxZ[i];
+                ux[k] = vx[i], uy[k] = vy[i], uz[k] = vz[i];
+            }
+            b = sorted, vx = ux, vy = uy, vz = uz;
+            continuity = RowContinuity::InCellOrder;
+        }
+        if (step == 8) {
+            // Swap-remove, as the world's storage does: the rows no longer name last step's bodies.
+            const std::uint32_t last = b.size() - 1;
+            for (auto* a : {&b.minX, &b.minY, &b.minZ, &b.maxX, &b.maxY, &b.maxZ}) (*a)[17] = (*a)[last];
+            b.resize(last);
+            vx[17] = vx[last], vy[17] = vy[last], vz[17] = vz[last];
+            vx.pop_back(), vy.pop_back(), vz.pop_back();
+            continuity = RowContinuity::None;
+        }
+        if (step == 10) b.maxX[3] += 0.2f;                                   // outgrows the top level: a new layout
+        if (step == 12) b.minY[5] -= 3.0f * half, b.maxY[5] -= 3.0f * half;  // leaves the span: a new layout
+        std::vector<BodyPair> got, want;
+        grid.findPairs(b, {}, pool, got, continuity);
+        fresh.findPairs(b, {}, pool, want);
+        std::sort(got.begin(), got.end());
+        std::sort(want.begin(), want.end());
+        ASSERT_EQ(got, want) << "step " << step;
+        if (grid.lastSortWasIncremental()) {
+            ++incrementalSteps;
+            EXPECT_LT(grid.changedCells(), b.size() / 4) << "step " << step;
+        }
+        EXPECT_EQ(grid.lastSortWasIncremental(), step != 0 && step != 8 && step != 10 && step != 12) << "step " << step;
+        if (step == 13) {
+            EXPECT_EQ(got, sweptPairs(b));
+        }
+        for (std::uint32_t i = 0; i < b.size(); ++i) {
+            b.minX[i] += vx[i], b.maxX[i] += vx[i];
+            b.minY[i] += vy[i], b.maxY[i] += vy[i];
+            b.minZ[i] += vz[i], b.maxZ[i] += vz[i];
+        }
+    }
+    EXPECT_EQ(incrementalSteps, 10u);
+}
+
 TEST(MultiResolutionGrid, OutputIndependentOfThreadCount) {
     TaskPool one(1), two(2);
     MultiResolutionGrid gridOne, gridTwo;
