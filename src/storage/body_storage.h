@@ -97,8 +97,7 @@ public:
     bool alive(std::uint32_t slot) const { return ids_.alive(slot); }
     /// The handle of the body in `slot` (its last body when the slot is free).
     BodyId idAt(std::uint32_t slot) const { return ids_.idAt(slot); }
-    /// Counts the bodies added and removed and the reorders: while it stays the same, every dense index names the same
-    /// body.
+    /// Counts additions, removals and reorders: while it stays the same, every dense index names the same body.
     std::uint64_t layoutChanges() const { return layoutChanges_; }
     /// Puts the moving bodies in a new order: row k becomes the body that is at row order[k] now (`order` is a
     /// permutation of 0 .. moving.size() - 1). Every handle keeps its body; dense indices change, which

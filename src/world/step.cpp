@@ -50,7 +50,7 @@ detail::SolverParts solverParts(World::Impl& w) {
 /// Large worlds keep their moving bodies in the grid's cell order of the last step, renewed every period: the
 /// order only decides where rows live, so it costs one pass over the storage and saves cache misses in every stage
 /// after it. Runs before anything of this step reads a dense index; a result depends on it only through the order
-/// of pairs, which is the same on every thread count.
+/// of pairs, which is the same on every thread count. Its time counts in the broad phase's.
 void keepBodiesInSpatialOrder(World::Impl& w, StepContext& step) {
     if (w.bodies.moving.size() < w.spatialOrderFrom) return;
     if (w.spatiallyOrdered && ++w.stepsSinceSpatialOrder < w.spatialOrderPeriod) return;
