@@ -136,7 +136,9 @@ struct Scratch {
     std::vector<Vec3> vertices;
     std::vector<std::uint32_t> faces, everyFace;  ///< faces in the cone of possible axes; 0, 1, 2, ...
     std::vector<std::uint32_t> edgesA, edgesB;    ///< the edges whose arcs reach the cone of possible axes
-    std::vector<float> arcsA[9];                  ///< HullAdjacency::arcs of edgesA, packed
+    /// Per edge of edgesA, packed in SoA rows: HullAdjacency::arcs (rows 0-8), then the edge's start, direction and
+    /// start relative to the interior (9-17) and its squared length (18), as edgeOfA computes them.
+    std::vector<float> arcsA[19];
     HullAdjacency adjA, adjB;
 };
 Scratch& scratch() {
@@ -538,13 +540,28 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         for (int i = 0; i < countA; ++i) packed[i] = A.arcs[k][sc.edgesA[i]];
         for (int i = countA; i < static_cast<int>(paddedRow(countA)); ++i) packed[i] = 0;  // fails the sign tests
     }
+    for (int i = 0; i < countA; ++i) {
+        const EdgeOfA ea = edgeOfA(A, static_cast<int>(sc.edgesA[i]));
+        const float values[10] = {ea.pa.x, ea.pa.y,    ea.pa.z,    ea.da.x,    ea.da.y,
+                                  ea.da.z, ea.paRel.x, ea.paRel.y, ea.paRel.z, ea.da2};
+        for (int k = 0; k < 10; ++k) sc.arcsA[9 + k][i] = values[k];
+    }
+    for (int k = 9; k < 19; ++k)
+        for (int i = countA; i < static_cast<int>(paddedRow(countA)); ++i) sc.arcsA[k][i] = 0;
     // Each of B's edges against all of A's at once, A's in SIMD lanes: the three sign tests of the Minkowski-face test
-    // branch-free over A's arcs (most pairs fail them), and only the lanes that pass go on, one at a time, through
-    // edgePairCandidate, which repeats the tests with the same arithmetic and finds the axis. The best pair is the
-    // one a scan over A's edges, then B's, would keep first: the largest separation, ties to the lowest (i, j).
+    // branch-free over A's arcs (most pairs fail them), then the axis and the separation along it, and only the lanes
+    // that may beat `limit` go on, one at a time, through edgePairCandidate, which decides with its own arithmetic
+    // and finds the axis. The lanes' separation is only a filter: it drops a lane when it lies below the limit by a
+    // slack far above its rounding (or the edges are clearly parallel), so every pair the scalar test would take
+    // still reaches it, and the answer is the plain search's bit for bit. (On the hull pile ~17 lanes a call pass the
+    // sign tests and ~0.5 the separation.) The best pair is the one a scan over A's edges, then B's, would keep
+    // first: the largest separation, ties to the lowest (i, j).
     using simd::FloatW;
-    const float* arcs[9];
-    for (int k = 0; k < 9; ++k) arcs[k] = sc.arcsA[k].data();
+    const float* arcs[19];
+    for (int k = 0; k < 19; ++k) arcs[k] = sc.arcsA[k].data();
+    const FloatW filterLimit(limit - 1e-4f * (A.size + B.size));
+    const FloatW clearlyParallel(0.5f * kBoxEdgeParallelEpsilon * kBoxEdgeParallelEpsilon);
+    const FloatW orientationFloor(1e-3f * (A.size + B.size));
     float sepE = -INFINITY;
     int edgeA = -1, edgeB = -1;
     Vec3 axisE{};
@@ -557,6 +574,9 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         const Vec3 dirB = vb[eb.v1] - vb[eb.v0];
         const FloatW n0x(n0.x), n0y(n0.y), n0z(n0.z), n1x(n1.x), n1y(n1.y), n1z(n1.z), cx(c.x), cy(c.y), cz(c.z);
         const FloatW zero(0.0f);
+        const Vec3 pb = vb[eb.v0];
+        const FloatW dbx(dirB.x), dby(dirB.y), dbz(dirB.z), pbx(pb.x), pby(pb.y), pbz(pb.z);
+        const float db2 = dot(dirB, dirB);
         for (int i0 = 0; i0 < countA; i0 += static_cast<int>(simd::kLanes)) {
             const auto row = [&](int k) { return simd::load<FloatW>(arcs[k] + i0); };
             const FloatW bxaX = row(6), bxaY = row(7), bxaZ = row(8);
@@ -564,8 +584,23 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
             const FloatW dba = -(n1x * bxaX + n1y * bxaY + n1z * bxaZ);
             const FloatW adc = row(0) * cx + row(1) * cy + row(2) * cz;
             const FloatW bdc = row(3) * cx + row(4) * cy + row(5) * cz;
-            const simd::MaskW fail = (cba * dba >= zero) | (adc * bdc >= zero) | (cba * bdc <= zero);
+            simd::MaskW fail = (cba * dba >= zero) | (adc * bdc >= zero) | (cba * bdc <= zero);
             if (simd::all(fail)) continue;
+            {
+                const FloatW daX = row(12), daY = row(13), daZ = row(14);
+                const FloatW ax = daY * dbz - daZ * dby, ay = daZ * dbx - daX * dbz, az = daX * dby - daY * dbx;
+                const FloatW len2 = ax * ax + ay * ay + az * az;
+                const FloatW outward = ax * row(15) + ay * row(16) + az * row(17);
+                const FloatW num = ax * (pbx - row(9)) + ay * (pby - row(10)) + az * (pbz - row(11));
+                const FloatW length = simd::sqrt(len2);
+                const FloatW oriented = simd::select(outward < zero, -num, num);
+                // A lane whose orientation is unsure (an axis at right angles to the edge's offset from the interior)
+                // is left to the scalar test.
+                const simd::MaskW sure = simd::abs(outward) > orientationFloor * length;
+                fail = fail | (len2 < clearlyParallel * row(18) * FloatW(db2)) |
+                       (sure & (oriented < filterLimit * length));
+                if (simd::all(fail)) continue;
+            }
             simd::storeMask(skip, fail);
             for (int k = 0; k < static_cast<int>(simd::kLanes) && i0 + k < countA; ++k) {
                 if (skip[k]) continue;
