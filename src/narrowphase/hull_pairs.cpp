@@ -227,17 +227,23 @@ void lowestAlongFaces(const float* const rows[3], int f0, const Vec3* vertices, 
 
 /// Writes to `out`, in ascending order, the edges whose arcs come within the cone {n : n . u > coneCos} (u a unit
 /// direction in the hull's frame) and returns their count: the arc lies within half its angle h of its midpoint m,
-/// so it reaches the cone unless angle(u, m) - h exceeds the cone's angle. `out` holds edgeCount + kLanes.
+/// so it reaches the cone unless angle(u, m) exceeds h plus the cone's angle a, that is unless cos angle(u, m) <
+/// cos(h + a) = cos h cos a - sin h sin a (for h + a < pi, else it always reaches it). The cone's sine is taken
+/// once, not an angle per edge. `out` holds edgeCount + kLanes.
 int edgesNearCone(const std::vector<float>* cones, int edgeCount, Vec3 u, float coneCos, std::uint32_t* out) {
     using simd::FloatW;
-    const FloatW ux(u.x), uy(u.y), uz(u.z), threshold(coneCos), zero(0.0f), one(1.0f);
+    if (!(coneCos > -1.0f)) {  // every axis
+        for (int e = 0; e < edgeCount; ++e) out[e] = static_cast<std::uint32_t>(e);
+        return edgeCount;
+    }
+    const float cosCone = minf(coneCos, 1.0f), sinCone = std::sqrt(maxf(1.0f - cosCone * cosCone, 0.0f));
+    const FloatW ux(u.x), uy(u.y), uz(u.z), cosA(cosCone), sinA(sinCone), minusCosA(-cosCone);
     alignas(64) bool near[simd::kLanes];
     int count = 0;
     for (int e0 = 0; e0 < edgeCount; e0 += static_cast<int>(simd::kLanes)) {
         const auto row = [&](int k) { return simd::load<FloatW>(cones[k].data() + e0); };
         const FloatW c = row(0) * ux + row(1) * uy + row(2) * uz, cosH = row(3), sinH = row(4);
-        const FloatW sinAngle = simd::sqrt(simd::max(one - c * c, zero));
-        simd::storeMask(near, (c >= cosH) | (c * cosH + sinAngle * sinH > threshold));
+        simd::storeMask(near, (cosH <= minusCosA) | (c >= cosH * cosA - sinH * sinA));
         const int lanes = std::min(static_cast<int>(simd::kLanes), edgeCount - e0);
         for (int k = 0; k < lanes; ++k) {  // branch-free: the unpredictable test picks only the next slot
             out[count] = static_cast<std::uint32_t>(e0 + k);
