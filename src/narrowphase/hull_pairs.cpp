@@ -7,6 +7,7 @@
 // with unrelated edits and differ between the build levels. Its wide loops are explicit SIMD.
 #pragma GCC optimize("no-tree-slp-vectorize")
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -138,7 +139,7 @@ struct Scratch {
     std::vector<std::uint32_t> edgesA, edgesB;    ///< the edges whose arcs reach the cone of possible axes
     /// Per edge of edgesA, packed in SoA rows: HullAdjacency::arcs (rows 0-8), then the edge's start, direction and
     /// start relative to the interior (9-17) and its squared length (18), as edgeOfA computes them.
-    std::vector<float> arcsA[19];
+    std::vector<float> edgeRowsA[19];
     HullAdjacency adjA, adjB;
 };
 Scratch& scratch() {
@@ -539,21 +540,19 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     }
     const int countA = edgesNearCone(A.arcCones, A.edgeCount, towardB, edgeCos, sc.edgesA.data());
     const int countB = edgesNearCone(B.arcCones, B.edgeCount, towardAInB, edgeCos, sc.edgesB.data());
-    for (std::vector<float>& row : sc.arcsA)
-        if (row.size() < paddedRow(countA)) row.resize(paddedRow(countA));
-    for (int k = 0; k < 9; ++k) {
-        float* packed = sc.arcsA[k].data();
-        for (int i = 0; i < countA; ++i) packed[i] = A.arcs[k][sc.edgesA[i]];
-        for (int i = countA; i < static_cast<int>(paddedRow(countA)); ++i) packed[i] = 0;  // fails the sign tests
-    }
+    const int padded = static_cast<int>(paddedRow(countA));
+    for (std::vector<float>& row : sc.edgeRowsA)
+        if (row.size() < static_cast<std::size_t>(padded)) row.resize(static_cast<std::size_t>(padded));
     for (int i = 0; i < countA; ++i) {
-        const EdgeOfA ea = edgeOfA(A, static_cast<int>(sc.edgesA[i]));
-        const float values[10] = {ea.pa.x, ea.pa.y,    ea.pa.z,    ea.da.x,    ea.da.y,
-                                  ea.da.z, ea.paRel.x, ea.paRel.y, ea.paRel.z, ea.da2};
-        for (int k = 0; k < 10; ++k) sc.arcsA[9 + k][i] = values[k];
+        const int e = static_cast<int>(sc.edgesA[i]);
+        const EdgeOfA ea = edgeOfA(A, e);
+        const float edge[10] = {ea.pa.x, ea.pa.y,    ea.pa.z,    ea.da.x,    ea.da.y,
+                                ea.da.z, ea.paRel.x, ea.paRel.y, ea.paRel.z, ea.da2};
+        for (int k = 0; k < 9; ++k) sc.edgeRowsA[k][i] = A.arcs[k][e];
+        for (int k = 0; k < 10; ++k) sc.edgeRowsA[9 + k][i] = edge[k];
     }
-    for (int k = 9; k < 19; ++k)
-        for (int i = countA; i < static_cast<int>(paddedRow(countA)); ++i) sc.arcsA[k][i] = 0;
+    // Padding lanes are zeros: they fail the sign tests.
+    for (std::vector<float>& row : sc.edgeRowsA) std::fill(row.begin() + countA, row.begin() + padded, 0.0f);
     // Each of B's edges against all of A's at once, A's in SIMD lanes: the three sign tests of the Minkowski-face test
     // branch-free over A's arcs (most pairs fail them), then the axis and the separation along it, and only the lanes
     // that may beat `limit` go on, one at a time, through edgePairCandidate, which decides with its own arithmetic
@@ -563,8 +562,8 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
     // sign tests and ~0.5 the separation.) The best pair is the one a scan over A's edges, then B's, would keep
     // first: the largest separation, ties to the lowest (i, j).
     using simd::FloatW;
-    const float* arcs[19];
-    for (int k = 0; k < 19; ++k) arcs[k] = sc.arcsA[k].data();
+    const float* rowsA[19];
+    for (int k = 0; k < 19; ++k) rowsA[k] = sc.edgeRowsA[k].data();
     const FloatW filterLimit(limit - 1e-4f * (A.size + B.size));
     const FloatW clearlyParallel(0.5f * kBoxEdgeParallelEpsilon * kBoxEdgeParallelEpsilon);
     const FloatW orientationFloor(1e-3f * (A.size + B.size));
@@ -584,7 +583,7 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         const FloatW dbx(dirB.x), dby(dirB.y), dbz(dirB.z), pbx(pb.x), pby(pb.y), pbz(pb.z);
         const float db2 = dot(dirB, dirB);
         for (int i0 = 0; i0 < countA; i0 += static_cast<int>(simd::kLanes)) {
-            const auto row = [&](int k) { return simd::load<FloatW>(arcs[k] + i0); };
+            const auto row = [&](int k) { return simd::load<FloatW>(rowsA[k] + i0); };
             const FloatW bxaX = row(6), bxaY = row(7), bxaZ = row(8);
             const FloatW cba = -(n0x * bxaX + n0y * bxaY + n0z * bxaZ);
             const FloatW dba = -(n1x * bxaX + n1y * bxaY + n1z * bxaZ);
