@@ -31,6 +31,13 @@ if [[ -d $build/lib/glibc-hwcaps ]]; then
 else
   ctest --test-dir "$build" --output-on-failure -j "$(nproc)"
 fi
+# The accuracy report's short run (about a minute), so that the command cannot rot; docs/ACCURACY.md comes from a
+# full run (`build/apps/rubble accuracy --out docs`).
+if [[ -z $sanitize ]]; then
+  report=$(mktemp -d)
+  "$build/apps/rubble" accuracy --quick --out "$report"
+  rm -rf "$report"
+fi
 # The installed package, used from outside the tree: CMake (examples/consumer) and pkg-config.
 if [[ -z $sanitize ]]; then
   consumer=$(mktemp -d)

@@ -10,6 +10,7 @@
 #include <thread>
 #include <vector>
 
+#include "accuracy_command.h"
 #include "command_line.h"
 #include "rubble/build_info.h"
 #include "rubble/error.h"
@@ -98,9 +99,11 @@ Options parseOptions(int argc, char** argv) {
     const std::string_view command = argv[1];
     if (command == "--help" || command == "-h" || command == "help") {
         std::fputs(kUsage, stdout);
+        std::fputs("\n", stdout);
+        std::fputs(rubble::apps::kAccuracyUsage, stdout);
         std::exit(0);
     }
-    if (command != "run") usageError("unknown command '" + std::string(command) + "'");
+    if (command != "run") usageError("unknown command '" + std::string(command) + "' (commands: run, accuracy)");
     Options o;
     for (int i = 2; i < argc; ++i) {
         const std::string_view a = argv[i];
@@ -348,6 +351,7 @@ int run(const Options& options) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    if (argc >= 2 && std::string_view(argv[1]) == "accuracy") return rubble::apps::runAccuracyCommand(argc, argv);
     const Options options = parseOptions(argc, argv);
     try {
         return run(options);
