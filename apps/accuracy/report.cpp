@@ -199,7 +199,7 @@ void writePlots(const std::string& dir, const std::vector<SceneResults>& results
                    << "set title "
                    << quoted(scene.scene.title + (anyZero ? " (errors of 0 drawn at " + formatError(zeroAt) + ")" : ""))
                    << " noenhanced\n"
-                   << "set logscale xy\nset grid xtics ytics mxtics mytics lc rgb '#dddddd'\n"
+                   << "set logscale xy\nset grid xtics ytics lc rgb '#dddddd'\n"
                    << "set xlabel "
                    << quoted("ms per 1/60 s simulated (median step time x steps per 1/60 s), " +
                              std::to_string(threads) + (threads == 1 ? " thread" : " threads"))
@@ -286,33 +286,35 @@ void writeMarkdown(const std::string& path, const std::string& plotDir, const st
        << "The third promise, simulate only the effects a scene calls for, measured: " << effects.description
        << ", run with every effect declared and with each one left out in turn (the world also drops an effect its "
           "content cannot show; `simulated` says what ran).\n\n"
-       << "Leaving an effect out changes what happens (without gravity nothing lands, without friction the pile "
-          "spreads), so the saving is the scene's, not a stage's alone; the last column is the median over the last "
-          "2 s, when what can sleep has had time to.\n\n"
-       << "| left out | simulated | ms/step | saved | stages that no longer ran | stage that saved most | ms/step, "
-          "last 2 s |\n"
+       << "Leaving an effect out changes what happens (without gravity nothing lands, without friction the bodies "
+          "roll and slide on), so what an effect costs is the scene's, not one stage's alone. A negative cost is "
+          "time the effect saves: sleeping's, once the bodies rest. The last column is the median over the last 2 s, "
+          "when what can sleep has had time to.\n\n"
+       << "| effect | simulated without it | ms/step without it | the effect's cost | stages that ran only with it | "
+          "stage whose time it changed most | ms/step without it, last 2 s |\n"
        << "|---|---|---|---|---|---|---|\n"
-       << "| nothing | all " << __builtin_popcount(effects.all.simulated.bits) << " | "
+       << "| (all " << __builtin_popcount(effects.all.simulated.bits) << ", none left out) | | "
        << formatMs(effects.all.msPerStep) << " | | | | " << formatMs(effects.all.msPerStepAtEnd) << " |\n";
+    const auto signedMs = [](double ms) { return format("%+.3g ms", ms); };
     for (const auto& [effect, run] : effects.without) {
         std::string stopped;
-        int mostSaved = -1;
-        double saved = 0;
+        int mostChanged = -1;
+        double change = 0;
         for (int k = 0; k < kStageCount; ++k) {
             const auto s = static_cast<std::size_t>(k);
             if (effects.all.stageRan[s] && !run.stageRan[s])
                 stopped += (stopped.empty() ? "" : ", ") + std::string(stageName(static_cast<Stage>(k)));
-            if (effects.all.stageMs[s] - run.stageMs[s] > saved)
-                saved = effects.all.stageMs[s] - run.stageMs[s], mostSaved = k;
+            const double delta = effects.all.stageMs[s] - run.stageMs[s];
+            if (std::abs(delta) > std::abs(change)) change = delta, mostChanged = k;
         }
-        const double total = effects.all.msPerStep - run.msPerStep;
+        const double cost = effects.all.msPerStep - run.msPerStep;
         md << "| " << effectName(effect) << " | "
            << (run.simulated == effects.all.simulated.without(effect) ? "the rest" : "differs") << " | "
-           << formatMs(run.msPerStep) << " | " << formatMs(total) << " ms ("
-           << format("%.0f", effects.all.msPerStep > 0 ? 100.0 * total / effects.all.msPerStep : 0.0) << "%) | "
+           << formatMs(run.msPerStep) << " | " << signedMs(cost) << " ("
+           << format("%+.0f", run.msPerStep > 0 ? 100.0 * cost / run.msPerStep : 0.0) << "%) | "
            << (stopped.empty() ? "-" : stopped) << " | "
-           << (mostSaved < 0 ? std::string("-")
-                             : std::string(stageName(static_cast<Stage>(mostSaved))) + " " + formatMs(saved) + " ms")
+           << (mostChanged < 0 ? std::string("-")
+                               : std::string(stageName(static_cast<Stage>(mostChanged))) + " " + signedMs(change))
            << " | " << formatMs(run.msPerStepAtEnd) << " |\n";
     }
     md << "\nWith every effect, " << effects.all.sleepingAtEnd << " bodies were asleep after the last step.\n";
