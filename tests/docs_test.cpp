@@ -29,3 +29,24 @@ TEST(Docs, ArchitecturePageNamesFilesThatExist) {
     }
     EXPECT_GT(checked, 15);
 }
+
+// docs/limits.md states every limit of include/rubble/limits.h: each constant the header defines has its row.
+TEST(Docs, LimitsPageStatesEveryLimit) {
+    const std::filesystem::path root = RUBBLE_SOURCE_DIR;
+    const auto read = [&](const char* file) {
+        std::ifstream in(root / file);
+        std::stringstream text;
+        text << in.rdbuf();
+        return text.str();
+    };
+    const std::string header = read("include/rubble/limits.h"), page = read("docs/limits.md");
+    ASSERT_FALSE(page.empty()) << "docs/limits.md is missing";
+    int constants = 0;
+    for (std::size_t at = header.find("constexpr"); at != std::string::npos; at = header.find("constexpr", at + 1)) {
+        const std::size_t name = header.find(" k", at), end = header.find(' ', name + 1);
+        const std::string constant = header.substr(name + 1, end - name - 1);
+        EXPECT_NE(page.find("`" + constant + "`"), std::string::npos) << constant << " has no row in docs/limits.md";
+        ++constants;
+    }
+    EXPECT_GE(constants, 15);
+}

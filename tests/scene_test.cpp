@@ -2,6 +2,7 @@
 // load with exactly the bodies SCENES.md describes (its formulas are evaluated independently here); a scene
 // instantiates into a World.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
 #include <cstdio>
@@ -43,12 +44,13 @@ const BadFile kBadFiles[] = {
     {"bad_toplevel.json", {"top level must be an object, got an array"}},
     {"bad_unknown_key.json", {"at /bodies/0/positon: unknown key 'positon' (did you mean 'position'?)"}},
     {"bad_position_type.json", {"at /bodies/3/position: expected an array of 3 numbers, got a string"}},
-    {"bad_negative_extent.json", {"at /shapes/cube/half_extents/1: must be > 0 (got -1)"}},
+    {"bad_negative_extent.json",
+     {"at /shapes/cube/half_extents/1: must be in [0.0001, 10000] m (got -1; docs/limits.md)"}},
     {"bad_unknown_shape.json", {"at /bodies/0/shape: unknown shape 'cub'", "cube"}},
     {"bad_integrator.json", {"at /settings/integrator: unknown integrator 'rk5'"}},
     {"bad_overflow.json", {"bad_overflow.json:3:48: number out of range: 1e999"}},
     {"bad_negative_count.json", {"at /generators/0/count: must be >= 0 (got -5)"}},
-    {"bad_too_many.json", {"at /generators/0:", "more than the limit of 10000000"}},
+    {"bad_too_many.json", {"at /generators/0:", "more than the limit of 16777216"}},
     {"bad_missing_shape.json", {"at /bodies/0: missing required key 'shape'"}},
     {"bad_dynamic_mesh.json", {"at /bodies/0/shape:", "static-only shape"}},
     {"bad_duplicate_key.json", {"bad_duplicate_key.json:3:", "duplicate key 'position'"}},
@@ -168,17 +170,54 @@ TEST(SceneLoader, SemanticErrorsBuiltInTest) {
     expectAll(msg(R"("generators": [{"type": "pyramd", "base": 3}])"),
               {"at /generators/0/type: unknown generator type 'pyramd' (did you mean 'pyramid'?)"});
     expectAll(msg(R"("generators": [{"type": "random", "shape": "cube", "count": 20000000, "min": 0, "max": 1}])"),
-              {"at /generators/0/count:", "more than the limit of 10000000"});
+              {"at /generators/0/count:", "more than the limit of 16777216"});
     expectAll(msg(R"("figures": ["max_displacement", "tunneled"])"),
               {"at /figures/1: unknown figure 'tunneled' (did you mean 'tunnelled'?)"});
-    expectAll(msg(R"("settings": {"dt": 0})"), {"at /settings/dt: must be > 0 (got 0)"});
+    expectAll(msg(R"("settings": {"dt": 0})"), {"at /settings/dt: must be in [1e-05, 1] s (got 0; docs/limits.md)"});
     expectAll(msg(R"("settings": {"broadphase": "octree"})"),
               {"at /settings/broadphase: unknown broad phase 'octree'", "sap"});
     expectAll(msg(R"("settings": {"effects": ["gravity", "gravity"]})"),
               {"at /settings/effects/1: effect 'gravity' listed twice"});
     expectAll(msg(R"("stepz": 3)"), {"at /stepz: unknown key 'stepz' (did you mean 'steps'?)"});
     expectAll(errorOf([] { parseScene(R"({"shapes": {"a/b": {"type": "sphere", "radius": -2}}})", "p.json"); }),
-              {"p.json: at /shapes/a~1b/radius: must be > 0 (got -2)"});
+              {"p.json: at /shapes/a~1b/radius: must be in [0.0001, 10000] m (got -2; docs/limits.md)"});
+}
+
+// The hostile files of issue 21, each refused at load with the file, the JSON path and the limit, before any
+// allocation the input sizes or any read that could block.
+TEST(SceneLoader, InputBeyondTheEnginesLimitsIsRefusedWithTheLimitAndThePlace) {
+    const std::string shapes = R"("shapes": {"cube": {"type": "box", "half_extents": [0.5, 0.5, 0.5]}})";
+    auto msg = [&](const std::string& body) {
+        return errorOf([&] { parseScene("{" + shapes + ", " + body + "}", "t.json"); });
+    };
+    expectAll(msg(R"("settings": {"substeps": 100})"), {"t.json: at /settings/substeps: must be <= 64 (got 100)"});
+    expectAll(msg(R"("settings": {"velocity_iterations": 5000})"), {"at /settings/velocity_iterations:", "1000"});
+    expectAll(msg(R"("settings": {"dt": 1e-40})"), {"at /settings/dt: must be in [1e-05, 1] s (got", "docs/limits.md"});
+    expectAll(msg(R"("settings": {"dt": 2})"), {"at /settings/dt: must be in [1e-05, 1] s (got 2; docs/limits.md)"});
+    expectAll(errorOf([] { parseScene(R"({"shapes": {"dust": {"type": "sphere", "radius": 1e-20}}})", "d.json"); }),
+              {"d.json: at /shapes/dust/radius: must be in [0.0001, 10000] m (got 1e-20; docs/limits.md)"});
+    expectAll(msg(R"("materials": {"lead": {"density": 1e38}})"),
+              {"at /materials/lead/density: must be in [0.001, 1e+06] kg/m^3 (got 1e+38; docs/limits.md)"});
+    expectAll(msg(R"("steps": 1000000000)"), {"at /steps:", "100000000"});
+    expectAll(errorOf([] { parseScene(R"({"shapes": {"m": {"type": "mesh", "obj": "/dev/zero"}}})", "o.json"); }),
+              {"o.json: at /shapes/m/obj: '/dev/zero' is an absolute path: name the OBJ file relative to the scene"});
+    expectAll(errorOf([] {
+                  parseScene(
+                      R"({"shapes": {"h": {"type": "heightfield", "rows": 70000, "columns": 70000, "heights": []}}})",
+                      "h.json");
+              }),
+              {"h.json: at /shapes/h", "9799720002 triangles, more than 16777216"});
+}
+
+TEST(SceneLoader, OnlyRegularFilesAreRead) {
+    // A FIFO would block a plain read for ever and a device never end: both are refused before a byte is read.
+    const std::string fifo = ::testing::TempDir() + "rubble_scene_fifo";
+    std::remove(fifo.c_str());
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    expectAll(errorOf([&] { loadScene(fifo); }),
+              {fifo, "is not a regular file (a device, FIFO or socket), not a scene file"});
+    expectAll(errorOf([] { loadObj("/dev/zero"); }), {"/dev/zero: is not a regular file", "not an OBJ file"});
+    std::remove(fifo.c_str());
 }
 
 TEST(SceneLoader, SolverKnobsReachTheSettings) {

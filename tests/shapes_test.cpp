@@ -45,15 +45,61 @@ void expectMassNear(const MassProperties& a, const MassProperties& b, double rel
         for (int j = 0; j < 3; ++j) EXPECT_NEAR(a.inertia(i, j), b.inertia(i, j), rel * scale) << i << "," << j;
 }
 
+TEST(ShapeValidation, WhatTheNarrowPhaseCannotRepresentIsRefusedAtCreation) {
+    // A prism whose caps have 40 sides: clipping holds two faces' sides in 64 points, so a face may have 32.
+    ConvexHullDef prism;
+    for (int k = 0; k < 40; ++k) {
+        const float a = 6.2831853f * static_cast<float>(k) / 40.0f;
+        for (const float y : {-0.5f, 0.5f}) prism.points.push_back({std::cos(a), y, std::sin(a)});
+    }
+    EXPECT_EQ(errorOf(prism),
+              "ConvexHullDef: a face of the hull has 40 sides, more than 32 (docs/limits.md): use "
+              "fewer points around its rim");
+    prism.points.resize(2 * 32);  // the first 32 rim points: caps of 32 sides are fine
+    EXPECT_EQ(errorOf(prism), "no error");
+
+    ConvexHullDef ball;  // 5,000 points on a sphere, every one a hull vertex
+    for (int k = 0; k < 5000; ++k) {
+        const float y = 1.0f - 2.0f * (static_cast<float>(k) + 0.5f) / 5000.0f, r = std::sqrt(1.0f - y * y);
+        const float a = 2.3999632f * static_cast<float>(k);
+        ball.points.push_back({r * std::cos(a), y, r * std::sin(a)});
+    }
+    EXPECT_EQ(errorOf(ball), "ConvexHullDef: the hull has 5000 vertices, more than 4096 (docs/limits.md)");
+
+    ConvexHullDef speck{{{0, 0, 0}, {1e-5f, 0, 0}, {0, 1e-5f, 0}, {0, 0, 1e-5f}}};
+    EXPECT_EQ(errorOf(speck),
+              "ConvexHullDef: the hull's half extent 5e-06 m and reach from its origin 1e-05 m must "
+              "lie in [0.0001, 10000] m (docs/limits.md)");
+
+    // 70,000 x 70,000 samples make 9.8e9 triangles: counted in 64 bits (32 would wrap to 1.2e9) and refused before
+    // the heights are looked at.
+    HeightfieldDef huge;
+    huge.rows = huge.columns = 70000;
+    EXPECT_EQ(errorOf(huge),
+              "HeightfieldDef: rows and columns make 9799720002 triangles, more than 16777216 (docs/limits.md)");
+
+    TriangleMeshDef far;
+    far.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 0, 2e5f}};
+    far.indices = {0, 1, 2};
+    EXPECT_EQ(errorOf(far),
+              "TriangleMeshDef: vertices[2] (0, 0, 200000) lies farther than 100000 m from the origin "
+              "on an axis (docs/limits.md)");
+}
+
 TEST(ShapeValidation, BadDefinitionsNameDefinitionFieldAndValue) {
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const float inf = std::numeric_limits<float>::infinity();
-    EXPECT_EQ(errorOf(SphereDef{0}), "SphereDef: radius must be > 0 (got 0)");
+    EXPECT_EQ(errorOf(SphereDef{0}), "SphereDef: radius must be in [0.0001, 10000] m (got 0; docs/limits.md)");
+    EXPECT_EQ(errorOf(SphereDef{1e-20f}), "SphereDef: radius must be in [0.0001, 10000] m (got 1e-20; docs/limits.md)");
     EXPECT_EQ(errorOf(SphereDef{inf}), "SphereDef: radius is not finite (inf)");
-    EXPECT_EQ(errorOf(BoxDef{{1, -1, 1}}), "BoxDef: halfExtents.y must be > 0 (got -1)");
+    EXPECT_EQ(errorOf(BoxDef{{1, -1, 1}}),
+              "BoxDef: halfExtents.y must be in [0.0001, 10000] m (got -1; docs/limits.md)");
+    EXPECT_EQ(errorOf(BoxDef{{1, 1, 2e4f}}),
+              "BoxDef: halfExtents.z must be in [0.0001, 10000] m (got 20000; docs/limits.md)");
     EXPECT_EQ(errorOf(BoxDef{{1, 1, nan}}), "BoxDef: halfExtents.z is not finite (nan)");
-    EXPECT_EQ(errorOf(CapsuleDef{0.5f, -0.25f}), "CapsuleDef: halfHeight must be >= 0 (got -0.25)");
-    EXPECT_EQ(errorOf(CapsuleDef{-1, 1}), "CapsuleDef: radius must be > 0 (got -1)");
+    EXPECT_EQ(errorOf(CapsuleDef{0.5f, -0.25f}),
+              "CapsuleDef: halfHeight must be in [0, 10000] m (got -0.25; docs/limits.md)");
+    EXPECT_EQ(errorOf(CapsuleDef{-1, 1}), "CapsuleDef: radius must be in [0.0001, 10000] m (got -1; docs/limits.md)");
     EXPECT_EQ(errorOf(ConvexHullDef{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {nan, 0, 1}}}),
               "ConvexHullDef: points[3] is not finite (nan, 0, 1)");
     EXPECT_EQ(errorOf(ConvexHullDef{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 2, 0}, {3, 1, 0}}}),
@@ -74,8 +120,13 @@ TEST(ShapeValidation, BadDefinitionsNameDefinitionFieldAndValue) {
 
     CompoundDef compound;
     EXPECT_EQ(errorOf(compound), "CompoundDef: children is empty: a compound needs at least one child");
+    compound.children.assign(65536, {SphereDef{1}, {}});
+    EXPECT_EQ(errorOf(compound),
+              "CompoundDef: children has 65536 shapes, more than 65535 (contacts name a child in "
+              "16 bits; docs/limits.md)");
     compound.children = {{SphereDef{1}, {}}, {BoxDef{}, {}}, {BoxDef{{0, 1, 1}}, {}}};
-    EXPECT_EQ(errorOf(compound), "CompoundDef: children[2]: BoxDef: halfExtents.x must be > 0 (got 0)");
+    EXPECT_EQ(errorOf(compound),
+              "CompoundDef: children[2]: BoxDef: halfExtents.x must be in [0.0001, 10000] m (got 0; docs/limits.md)");
     compound.children = {{SphereDef{1}, {{0, 0, 0}, {0, 0, 0, 0}}}};
     EXPECT_EQ(errorOf(compound),
               "CompoundDef: children[0]: local.rotation is a zero quaternion: it must be a rotation");
@@ -272,13 +323,14 @@ TEST(MassProperties, PublicComputeScalesAndRefusesStaticShapes) {
         }
         return std::string("no error");
     };
-    EXPECT_EQ(message(SphereDef{1}, 0), "computeMassProperties: density must be finite and > 0 (got 0)");
-    EXPECT_EQ(message(SphereDef{1}, NAN), "computeMassProperties: density must be finite and > 0 (got nan)");
+    EXPECT_EQ(message(SphereDef{1}, 0),
+              "computeMassProperties: density must be in [0.001, 1e+06] kg/m^3 (got 0; docs/limits.md)");
+    EXPECT_EQ(message(SphereDef{1}, NAN), "computeMassProperties: density is not finite (nan)");
     EXPECT_EQ(message(TriangleMeshDef{{{0, 0, 0}, {1, 0, 0}, {0, 0, 1}}, {0, 1, 2}}, 1),
               "computeMassProperties: TriangleMeshDef is static-only and has no mass properties");
     EXPECT_EQ(message(HeightfieldDef{2, 2, {0, 0, 0, 0}}, 1),
               "computeMassProperties: HeightfieldDef is static-only and has no mass properties");
-    EXPECT_EQ(message(SphereDef{-1}, 1), "SphereDef: radius must be > 0 (got -1)");
+    EXPECT_EQ(message(SphereDef{-1}, 1), "SphereDef: radius must be in [0.0001, 10000] m (got -1; docs/limits.md)");
 }
 
 }  // namespace

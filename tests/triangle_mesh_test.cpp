@@ -181,7 +181,7 @@ TEST(Obj, MalformedFilesNameFileAndLine) {
     EXPECT_EQ(loadError(d + "bad_face_token.obj"), d + "bad_face_token.obj:4: bad face vertex '1/2/3/4'");
     EXPECT_EQ(loadError(d + "nan_vertex.obj"), d + "nan_vertex.obj:1: vertex coordinate 'nan' is not finite");
     EXPECT_EQ(loadError(d + "missing.obj"), "cannot open " + d + "missing.obj: No such file or directory");
-    EXPECT_EQ(loadError(d), "cannot read " + d + ": Is a directory");
+    EXPECT_EQ(loadError(d), d + ": is a directory, not an OBJ file");
 }
 
 TEST(Obj, BinaryGarbageNeverCrashes) {

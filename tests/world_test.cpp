@@ -99,7 +99,14 @@ TEST(WorldValidation, RefusesBadBodyDefinitions) {
         {"BodyDef.angularVelocity is not finite", [](BodyDef& d) { d.angularVelocity.z = kNaN; }},
         {"material.friction must be >= 0", [](BodyDef& d) { d.material.friction = -0.1f; }},
         {"material.restitution must be in [0, 1]", [](BodyDef& d) { d.material.restitution = 1.5f; }},
-        {"material.density must be > 0", [](BodyDef& d) { d.material.density = 0; }},
+        {"material.density must be in [0.001, 1e+06] kg/m^3 (got 0;", [](BodyDef& d) { d.material.density = 0; }},
+        {"material.density must be in [0.001, 1e+06] kg/m^3 (got 1e+38;",
+         [](BodyDef& d) { d.material.density = 1e38f; }},
+        {"BodyDef.position (0, 200000, 0) lies farther than 100000 m from the origin on an axis (float spacing there "
+         "is 0.0078125 m",
+         [](BodyDef& d) {
+             d.position = {0, 2e5f, 0};
+         }},
         {"BodyDef.linearDamping must be >= 0", [](BodyDef& d) { d.linearDamping = -1; }},
         {"BodyDef.gravityScale is not finite", [](BodyDef& d) { d.gravityScale = kNaN; }},
         {"a static body cannot have a velocity",
@@ -125,8 +132,16 @@ TEST(WorldValidation, RefusesBadCallsOnBodies) {
                   world.setTransform(body, {}, {1, 1, 0, 0});
               }).find("not a unit quaternion"),
               std::string::npos);
-    EXPECT_NE(errorOf([&] { world.step(0); }).find("dt must be finite and > 0"), std::string::npos);
-    EXPECT_NE(errorOf([&] { world.step(kNaN); }).find("dt must be finite and > 0"), std::string::npos);
+    EXPECT_EQ(errorOf([&] { world.step(0); }), "World::step: dt must be in [1e-05, 1] s (got 0; docs/limits.md)");
+    EXPECT_EQ(errorOf([&] { world.step(1e-40f); }),
+              "World::step: dt must be in [1e-05, 1] s (got 9.99995e-41; docs/limits.md)")
+        << "a subnormal step, which flush-to-zero would read as 0";
+    EXPECT_EQ(errorOf([&] { world.step(kNaN); }), "World::step: dt is not finite (nan)");
+    EXPECT_EQ(errorOf([&] {
+                  world.setTransform(body, {-3e5f, 0, 0}, {});
+              }),
+              "World::setTransform: position (-300000, 0, 0) lies farther than 100000 m from the origin on an axis "
+              "(float spacing there is 0.0078125 m; docs/limits.md)");
     WorldSettings bad;
     bad.substeps = 0;
     EXPECT_NE(errorOf([&] { world.setSettings(bad); }).find("substeps must be in [1, 64]"), std::string::npos);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <optional>
+#include <random>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -14,6 +15,7 @@
 #include "command_line.h"
 #include "rubble/build_info.h"
 #include "rubble/error.h"
+#include "rubble/limits.h"
 #include "rubble/runtime.h"
 #include "rubble/scene.h"
 #include "rubble/world.h"
@@ -112,7 +114,7 @@ Options parseOptions(int argc, char** argv) {
             return argv[++i];
         };
         if (a == "--steps")
-            o.steps = parseCount(a, value(), 0, 100'000'000);
+            o.steps = parseCount(a, value(), 0, rubble::limits::kMaxRunnerSteps);
         else if (a == "--threads")
             o.threads = static_cast<int>(parseCount(a, value(), 0, 1024));
         else if (a == "--broadphase") {
@@ -150,7 +152,32 @@ double median(std::vector<double> v) {
     return 0.5 * (v[mid] + *std::max_element(v.begin(), v.begin() + mid));
 }
 
-double largest(const std::vector<double>& v) { return v.empty() ? 0 : *std::max_element(v.begin(), v.end()); }
+/// Times of the steps (or of one stage) of a run: every one up to a million, then a uniform random sample of a
+/// million (reservoir sampling), so that a run of any length keeps bounded memory; the largest is kept exactly.
+class TimingSamples {
+public:
+    void add(double ms) {
+        ++count_;
+        largest_ = std::max(largest_, ms);
+        if (samples_.size() < kKept) {
+            samples_.push_back(ms);
+            return;
+        }
+        const std::uint64_t slot = random_() % count_;
+        if (slot < kKept) samples_[slot] = ms;
+    }
+    std::uint64_t count() const { return count_; }
+    bool empty() const { return count_ == 0; }
+    double median() const { return ::median(samples_); }
+    double largest() const { return largest_; }
+
+private:
+    static constexpr std::size_t kKept = std::size_t{1} << 20;
+    std::vector<double> samples_;
+    std::uint64_t count_ = 0;
+    double largest_ = 0;
+    std::mt19937_64 random_{1};
+};
 
 /// A one-line progress bar on stderr, only when stderr is a terminal.
 class ProgressBar {
@@ -185,19 +212,21 @@ std::string effectList(rubble::EffectSet set) {
     return out.empty() ? "none" : out;
 }
 
-void printStageTable(const std::vector<std::vector<double>>& stageMs, const std::vector<double>& stepMs) {
-    const double stepMedian = median(stepMs);
+void printStageTable(const std::vector<TimingSamples>& stageMs, const TimingSamples& stepMs) {
+    const double stepMedian = stepMs.median();
     // The worst step shows hitches (a static tree built inside a step, a burst of contacts) that a median hides.
     std::printf("\n%-22s %8s %12s %8s %12s\n", "stage", "ran", "median ms", "share", "worst ms");
     for (int k = 0; k < rubble::kStageCount; ++k) {
         const auto stage = static_cast<rubble::Stage>(k);
         // Continuous collision is a choice a scene makes: a scene without it has no row to show a zero in.
         if (stage == rubble::Stage::Ccd && stageMs[k].empty()) continue;
-        const double m = median(stageMs[k]);
-        std::printf("%-22s %8zu %12.4f %7.1f%% %12.4f\n", std::string(rubble::stageName(stage)).c_str(),
-                    stageMs[k].size(), m, stepMedian > 0 ? 100.0 * m / stepMedian : 0.0, largest(stageMs[k]));
+        const double m = stageMs[k].median();
+        std::printf("%-22s %8llu %12.4f %7.1f%% %12.4f\n", std::string(rubble::stageName(stage)).c_str(),
+                    static_cast<unsigned long long>(stageMs[k].count()), m,
+                    stepMedian > 0 ? 100.0 * m / stepMedian : 0.0, stageMs[k].largest());
     }
-    std::printf("%-22s %8zu %12.4f %7.1f%% %12.4f\n", "step", stepMs.size(), stepMedian, 100.0, largest(stepMs));
+    std::printf("%-22s %8llu %12.4f %7.1f%% %12.4f\n", "step", static_cast<unsigned long long>(stepMs.count()),
+                stepMedian, 100.0, stepMs.largest());
 }
 
 /// --realtime: the scene through the Runtime, with this thread standing in for a 60 Hz render loop.
@@ -205,8 +234,9 @@ int runRealtime(const Options& options, rubble::World world) {
     rubble::RuntimeSettings settings;
     settings.rate = options.rate;
     rubble::Runtime runtime(std::move(world), settings);
-    std::vector<std::vector<double>> stageMs(rubble::kStageCount);
-    std::vector<double> stepMs, interpolateMs;
+    std::vector<TimingSamples> stageMs(rubble::kStageCount);
+    TimingSamples stepMs;
+    std::vector<double> interpolateMs;
     std::uint64_t lastStep = 0;
     using Clock = std::chrono::steady_clock;
     const auto frame = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / 60.0));
@@ -220,9 +250,9 @@ int runRealtime(const Options& options, rubble::World world) {
         interpolateMs.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
         if (f.step != lastStep && f.slotCount() > 0) {  // sample the profile of the newest step once
             lastStep = f.step;
-            stepMs.push_back(f.profile.stepMs);
+            stepMs.add(f.profile.stepMs);
             for (int k = 0; k < rubble::kStageCount; ++k)
-                if (f.profile.stages[k].ran) stageMs[k].push_back(f.profile.stages[k].ms);
+                if (f.profile.stages[k].ran) stageMs[k].add(f.profile.stages[k].ms);
         }
         std::this_thread::sleep_until(next);
     }
@@ -238,7 +268,8 @@ int runRealtime(const Options& options, rubble::World world) {
                 static_cast<unsigned long long>(stats.droppedSteps), stats.droppedSeconds, stats.maxStepsPerWake,
                 stats.behind ? ", behind at the end" : "");
     std::printf("render     %zu frames, interpolate median %.4f ms\n", interpolateMs.size(), median(interpolateMs));
-    std::printf("\nprofile    sampled from %zu steps shown by the frames:", stepMs.size());
+    std::printf("\nprofile    sampled from %llu steps shown by the frames:",
+                static_cast<unsigned long long>(stepMs.count()));
     printStageTable(stageMs, stepMs);
     if (options.hash)
         std::printf("\nstate hash %016llx (depends on the machine's timing)\n",
@@ -280,20 +311,20 @@ int run(const Options& options) {
                 effectList(world.activeEffects()).c_str());
     if (options.realtime > 0) return runRealtime(options, std::move(world));
 
-    std::vector<std::vector<double>> stageMs(rubble::kStageCount);
-    std::vector<double> stepMs;
-    stepMs.reserve(static_cast<std::size_t>(steps));
-    TraceWriter trace;
+    std::vector<TimingSamples> stageMs(rubble::kStageCount);
+    TimingSamples stepMs;
+    std::optional<TraceWriter> trace;
+    if (!options.trace.empty()) trace.emplace(options.trace);  // an unwritable path fails before the run
     ProgressBar progress(steps);
     std::uint32_t frozen = 0;
     for (long s = 0; s < steps; ++s) {
         world.step(scene.settings.timeStep);
         figures.record(world);
         const rubble::Profile& p = world.lastProfile();
-        stepMs.push_back(p.stepMs);
+        stepMs.add(p.stepMs);
         for (int k = 0; k < rubble::kStageCount; ++k)
-            if (p.stages[k].ran) stageMs[k].push_back(p.stages[k].ms);
-        if (!options.trace.empty()) trace.addStep(p);
+            if (p.stages[k].ran) stageMs[k].add(p.stages[k].ms);
+        if (trace) trace->addStep(p);
         for (rubble::BodyId id : world.takeFrozenBodies()) {
             if (frozen++ < 10)
                 std::fprintf(stderr, "warning: body %u froze at step %ld: its state became non-finite\n", id.index, s);
@@ -302,7 +333,7 @@ int run(const Options& options) {
     }
     if (frozen > 10) std::fprintf(stderr, "warning: %u bodies froze in all\n", frozen);
 
-    const double stepMedian = median(stepMs);
+    const double stepMedian = stepMs.median();
     if (options.profile) {
         printStageTable(stageMs, stepMs);
         const rubble::Profile& last = world.lastProfile();
@@ -334,16 +365,17 @@ int run(const Options& options) {
                 "%u ball joints in SIMD lanes\n",
                 last.joints, last.jointMs, last.jointColours, last.batchedJoints);
     } else {
-        std::printf("\nstep       median %.4f ms over %zu steps\n", stepMedian, stepMs.size());
+        std::printf("\nstep       median %.4f ms over %llu steps\n", stepMedian,
+                    static_cast<unsigned long long>(stepMs.count()));
     }
 
     std::printf("\n");
     for (const rubble::SceneFigureMeter::Result& figure : figures.results(world))
         std::printf("figure     %s\n", figure.text.c_str());
     if (options.hash) std::printf("state hash %016llx\n", static_cast<unsigned long long>(world.stateHash()));
-    if (!options.trace.empty()) {
-        trace.write(options.trace);
-        std::printf("trace      %s (%zu events)\n", options.trace.c_str(), trace.eventCount());
+    if (trace) {
+        trace->finish();
+        std::printf("trace      %s (%zu events)\n", options.trace.c_str(), trace->eventCount());
     }
     return 0;
 }

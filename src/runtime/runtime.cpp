@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "rubble/error.h"
+#include "rubble/limits.h"
 #include "rubble/world.h"
 #include "runtime/input_queue.h"
 #include "runtime/snapshot.h"
@@ -26,8 +27,11 @@ using SteadyClock = std::chrono::steady_clock;
 using detail::fail;
 
 void validateSettings(const char* where, const RuntimeSettings& s) {
-    if (!std::isfinite(s.rate) || s.rate <= 0 || s.rate > 1e6)
-        fail(where, "settings.rate must be in (0, 1e6] steps per second (got " + std::to_string(s.rate) + ")");
+    // A step of 1 / rate must be one World::step accepts.
+    const double lo = 1.0 / limits::kMaxTimeStep, hi = 1.0 / limits::kMinTimeStep;
+    if (!(s.rate >= lo && s.rate <= hi))
+        fail(where, "settings.rate must be in [" + detail::formatNumber(lo) + ", " + detail::formatNumber(hi) +
+                        "] steps per second (got " + detail::formatNumber(s.rate) + "; docs/limits.md)");
     if (s.maxStepsPerWake < 1 || s.maxStepsPerWake > 1000)
         fail(where, "settings.maxStepsPerWake must be in [1, 1000] (got " + std::to_string(s.maxStepsPerWake) + ")");
 }

@@ -7,13 +7,14 @@
 #include <string_view>
 #include <vector>
 
+#include "rubble/limits.h"
 #include "rubble/scene.h"
 #include "rubble/shapes.h"
 
 namespace rubble::scene_detail {
 
-/// Largest number of bodies one scene may hold (explicit and generated together).
-inline constexpr std::uint64_t kMaxBodies = 10'000'000;
+/// Largest number of bodies one scene may hold (explicit and generated together): what a World may hold.
+inline constexpr std::uint64_t kMaxBodies = limits::kMaxSceneBodies;
 /// Largest number of triangles a generated terrain may have.
 inline constexpr std::uint64_t kMaxTerrainTriangles = 10'000'000;
 

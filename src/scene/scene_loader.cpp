@@ -28,7 +28,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/file_reading.h"
 #include "rubble/error.h"
+#include "rubble/limits.h"
 #include "rubble/scene.h"
 #include "scene/generators.h"
 
@@ -39,7 +41,6 @@ using Json = nlohmann::ordered_json;
 using scene_detail::jsonPointerToken;
 
 constexpr int kMaxDepth = 64;
-constexpr std::size_t kMaxFileBytes = std::size_t{1} << 30;  // 1 GiB
 
 // ---------------------------------------------------------------------------------------------------------------
 // Small text helpers
@@ -364,6 +365,28 @@ float getFloat(const Json& j, const Loc& at, Sign sign = Sign::Any) {
     return f;
 }
 
+/// `v` within one of the engine's limits (include/rubble/limits.h): the same numbers the World refuses with.
+float checkWithin(float v, const Loc& at, float lo, float hi, const char* unit) {
+    const auto shortly = [](float f) {  // as the World's messages print them: 1e-05, not 9.99999975e-06
+        char text[32];
+        std::snprintf(text, sizeof text, "%g", static_cast<double>(f));
+        return std::string(text);
+    };
+    if (!(v >= lo && v <= hi))
+        at.fail("must be in [" + shortly(lo) + ", " + shortly(hi) + "] " + unit + " (got " + shortly(v) +
+                "; docs/limits.md)");
+    return v;
+}
+
+float getFloatIn(const Json& j, const Loc& at, float lo, float hi, const char* unit) {
+    return checkWithin(getFloat(j, at), at, lo, hi, unit);
+}
+
+/// A radius or half extent.
+float getSize(const Json& j, const Loc& at) {
+    return getFloatIn(j, at, limits::kMinShapeSize, limits::kMaxShapeSize, "m");
+}
+
 double getDouble(const Json& j, const Loc& at, Sign sign = Sign::Any) {
     const double v = checkSign(getNumber(j, at), sign, at);
     // Generators round positions to float in the end: refuse what cannot be represented.
@@ -562,14 +585,18 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
                "contact_feature_drift"});
     // clang-format on
     WorldSettings& s = scene.settings;
-    if (j.contains("dt")) s.timeStep = getFloat(j["dt"], at / "dt", Sign::Positive);
+    if (j.contains("dt")) s.timeStep = getFloatIn(j["dt"], at / "dt", limits::kMinTimeStep, limits::kMaxTimeStep, "s");
     if (j.contains("gravity")) s.gravity = getVec3(j["gravity"], at / "gravity");
-    if (j.contains("substeps")) s.substeps = static_cast<int>(getInt(j["substeps"], at / "substeps", 1, 1000));
+    if (j.contains("substeps"))
+        s.substeps = static_cast<int>(getInt(j["substeps"], at / "substeps", 1, limits::kMaxSubsteps));
     if (j.contains("velocity_iterations"))
-        s.velocityIterations = static_cast<int>(getInt(j["velocity_iterations"], at / "velocity_iterations", 0, 1000));
+        s.velocityIterations =
+            static_cast<int>(getInt(j["velocity_iterations"], at / "velocity_iterations", 0, limits::kMaxIterations));
     if (j.contains("position_iterations"))
-        s.positionIterations = static_cast<int>(getInt(j["position_iterations"], at / "position_iterations", 0, 1000));
-    if (j.contains("threads")) s.threads = static_cast<int>(getInt(j["threads"], at / "threads", 0, 1024));
+        s.positionIterations =
+            static_cast<int>(getInt(j["position_iterations"], at / "position_iterations", 0, limits::kMaxIterations));
+    if (j.contains("threads"))
+        s.threads = static_cast<int>(getInt(j["threads"], at / "threads", 0, limits::kMaxThreads));
     if (j.contains("integrator")) {
         const std::string& name = getString(j["integrator"], at / "integrator");
         const auto v = integratorFromName(name);
@@ -660,7 +687,8 @@ Material Builder::parseMaterialObject(const Json& j, const Loc& at) const {
         m.restitution = getFloat(j["restitution"], at / "restitution", Sign::NonNegative);
         if (m.restitution > 1) (at / "restitution").fail("must be <= 1 (got " + formatNumber(m.restitution) + ")");
     }
-    if (j.contains("density")) m.density = getFloat(j["density"], at / "density", Sign::Positive);
+    if (j.contains("density"))
+        m.density = getFloatIn(j["density"], at / "density", limits::kMinDensity, limits::kMaxDensity, "kg/m^3");
     return m;
 }
 
@@ -735,19 +763,24 @@ ShapeDef Builder::parseShape(const Json& j, const Loc& at, bool childOnly, const
     if (type == "sphere") {
         checkKeys(j, at, {"type", "radius"});
         require(j, at, "radius");
-        return SphereDef{getFloat(j["radius"], at / "radius", Sign::Positive)};
+        return SphereDef{getSize(j["radius"], at / "radius")};
     }
     if (type == "box") {
         checkKeys(j, at, {"type", "half_extents"});
         require(j, at, "half_extents");
-        return BoxDef{getVec3(j["half_extents"], at / "half_extents", Sign::Positive)};
+        const Loc h = at / "half_extents";
+        const Vec3 half = getVec3(j["half_extents"], h);
+        const auto size = [&](float v, std::size_t axis) {
+            return checkWithin(v, h / axis, limits::kMinShapeSize, limits::kMaxShapeSize, "m");
+        };
+        return BoxDef{{size(half.x, 0), size(half.y, 1), size(half.z, 2)}};
     }
     if (type == "capsule") {
         checkKeys(j, at, {"type", "radius", "half_height"});
         require(j, at, "radius");
         require(j, at, "half_height");
-        return CapsuleDef{getFloat(j["radius"], at / "radius", Sign::Positive),
-                          getFloat(j["half_height"], at / "half_height", Sign::NonNegative)};
+        return CapsuleDef{getSize(j["radius"], at / "radius"),
+                          getFloatIn(j["half_height"], at / "half_height", 0, limits::kMaxShapeSize, "m")};
     }
     if (type == "hull") {
         checkKeys(j, at, {"type", "points"});
@@ -807,8 +840,12 @@ ShapeDef Builder::parseShape(const Json& j, const Loc& at, bool childOnly, const
         if (j.contains("obj")) {
             const std::string& rel = getString(j["obj"], at / "obj");
             if (rel.empty()) (at / "obj").fail("empty path");
-            const std::filesystem::path objPath =
-                std::filesystem::path(rel).is_absolute() ? std::filesystem::path(rel) : dir / rel;
+            // A scene names its meshes relative to itself, so that it reads the same on any machine and cannot
+            // reach for files elsewhere (a scene may come from anyone).
+            if (std::filesystem::path(rel).is_absolute())
+                (at / "obj")
+                    .fail("'" + printable(rel) + "' is an absolute path: name the OBJ file relative to the scene");
+            const std::filesystem::path objPath = dir / rel;
             TriangleMeshDef mesh;
             try {
                 mesh = loadObj(objPath.string());
@@ -851,6 +888,9 @@ ShapeDef Builder::parseShape(const Json& j, const Loc& at, bool childOnly, const
         const Json& idx = expectArray(j["indices"], il, "a flat array of vertex indices, three per triangle");
         if (idx.empty() || idx.size() % 3 != 0)
             il.fail("expected a non-empty multiple of 3 indices, got " + std::to_string(idx.size()));
+        if (idx.size() / 3 > limits::kMaxMeshTriangles)
+            il.fail("makes " + std::to_string(idx.size() / 3) + " triangles, more than " +
+                    std::to_string(limits::kMaxMeshTriangles) + " (docs/limits.md)");
         if (mesh.vertices.size() > 0xFFFFFFFFu) (at / "vertices").fail("too many vertices");
         const auto nv = static_cast<std::int64_t>(mesh.vertices.size());
         mesh.indices.reserve(idx.size());
@@ -866,6 +906,10 @@ ShapeDef Builder::parseShape(const Json& j, const Loc& at, bool childOnly, const
         HeightfieldDef hf;
         hf.rows = static_cast<std::uint32_t>(getInt(j["rows"], at / "rows", 2, 0xFFFFFFFF));
         hf.columns = static_cast<std::uint32_t>(getInt(j["columns"], at / "columns", 2, 0xFFFFFFFF));
+        const std::uint64_t triangles = 2 * (std::uint64_t{hf.rows} - 1) * (std::uint64_t{hf.columns} - 1);
+        if (triangles > limits::kMaxMeshTriangles)
+            at.fail("rows and columns make " + std::to_string(triangles) + " triangles, more than " +
+                    std::to_string(limits::kMaxMeshTriangles) + " (docs/limits.md)");
         const Loc hl = at / "heights";
         const Json& h = expectArray(j["heights"], hl, "an array of rows * columns heights");
         const std::uint64_t expected = std::uint64_t{hf.rows} * hf.columns;
@@ -1295,7 +1339,8 @@ Scene parseScene(std::string_view text, const std::string& sourceName) {
                "figures"});
     if (doc.contains("name")) b.scene.name = getString(doc["name"], root / "name");
     if (doc.contains("description")) getString(doc["description"], root / "description");
-    if (doc.contains("steps")) b.scene.steps = static_cast<int>(getInt(doc["steps"], root / "steps", 0, 1'000'000'000));
+    if (doc.contains("steps"))
+        b.scene.steps = static_cast<int>(getInt(doc["steps"], root / "steps", 0, limits::kMaxRunnerSteps));
     if (doc.contains("settings")) b.parseSettings(doc["settings"], root / "settings");
     if (doc.contains("materials")) b.parseMaterials(doc["materials"], root / "materials");
     if (doc.contains("shapes")) b.parseShapes(doc["shapes"], root / "shapes");
@@ -1317,19 +1362,7 @@ void overrideSettings(Scene& scene, std::string_view settingsJson, const std::st
 }
 
 Scene loadScene(const std::string& path) {
-    std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
-    if (!f) throw Error("cannot open " + path + ": " + std::strerror(errno));
-    std::string text;
-    char buf[1 << 16];
-    for (;;) {
-        const std::size_t got = std::fread(buf, 1, sizeof buf, f.get());
-        text.append(buf, got);
-        if (text.size() > kMaxFileBytes)
-            throw Error(path + ": file too large (more than " + std::to_string(kMaxFileBytes >> 20) + " MiB)");
-        if (got < sizeof buf) break;
-    }
-    if (std::ferror(f.get())) throw Error("cannot read " + path + ": " + std::strerror(errno));
-    return parseScene(text, path);
+    return parseScene(detail::readRegularFile(path, limits::kMaxSceneFileBytes, "a scene file"), path);
 }
 
 }  // namespace rubble

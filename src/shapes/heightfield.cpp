@@ -5,6 +5,7 @@
 #include <string>
 
 #include "rubble/error.h"
+#include "rubble/limits.h"
 #include "shapes/shape.h"
 #include "world/validation.h"
 
@@ -26,6 +27,11 @@ Heightfield buildHeightfield(const HeightfieldDef& def) {
             fail(kDef, std::string(axes[i]) + " is not finite (" + formatNumber(spacing[i]) + ")");
         if (!(spacing[i] > 0)) fail(kDef, std::string(axes[i]) + " must be > 0 (got " + formatNumber(spacing[i]) + ")");
     }
+    // Counted in 64 bits: rows * columns of two 32-bit numbers overflows 32.
+    const std::uint64_t triangles = 2 * (std::uint64_t(def.rows) - 1) * (std::uint64_t(def.columns) - 1);
+    if (triangles > limits::kMaxMeshTriangles)
+        fail(kDef, "rows and columns make " + std::to_string(triangles) + " triangles, more than " +
+                       std::to_string(limits::kMaxMeshTriangles) + " (docs/limits.md)");
     const std::uint64_t expected = std::uint64_t(def.rows) * def.columns;
     if (def.heights.size() != expected)
         fail(kDef, "heights has " + std::to_string(def.heights.size()) +

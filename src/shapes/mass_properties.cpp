@@ -6,6 +6,7 @@
 #include <variant>
 
 #include "rubble/error.h"
+#include "rubble/limits.h"
 #include "shapes/shape.h"
 #include "world/validation.h"
 
@@ -185,9 +186,8 @@ MassProperties computeMassProperties(const ShapeDef& shape, float density) {
         throw Error(std::string("computeMassProperties: ") +
                     (std::holds_alternative<TriangleMeshDef>(shape) ? "TriangleMeshDef" : "HeightfieldDef") +
                     " is static-only and has no mass properties");
-    if (!std::isfinite(density) || !(density > 0))
-        throw Error("computeMassProperties: density must be finite and > 0 (got " + detail::formatNumber(density) +
-                    ")");
+    detail::requireWithin("computeMassProperties", "density", density, limits::kMinDensity, limits::kMaxDensity,
+                          "kg/m^3");
     return detail::scaleMass(detail::buildShape(shape).unitMass, density);
 }
 

@@ -12,15 +12,19 @@
 
 #include "broadphase/static_bvh.h"
 #include "rubble/error.h"
+#include "rubble/limits.h"
 #include "shapes/mesh_adjacency.h"
 
 namespace rubble::detail {
 
 namespace {
 
-void requirePositive(const char* def, const char* field, float value) {
+/// A radius or half extent: within the sizes whose mass, inertia and contacts float arithmetic carries.
+void requireSize(const char* def, const char* field, float value) {
     requireFinite(def, field, value);
-    if (!(value > 0)) fail(def, std::string(field) + " must be > 0 (got " + formatNumber(value) + ")");
+    if (!(value >= limits::kMinShapeSize && value <= limits::kMaxShapeSize))
+        fail(def, std::string(field) + " must be in [" + formatNumber(limits::kMinShapeSize) + ", " +
+                      formatNumber(limits::kMaxShapeSize) + "] m (got " + formatNumber(value) + "; docs/limits.md)");
 }
 
 Aabb emptyAabb() {
@@ -69,7 +73,7 @@ Aabb childBounds(const Shape& child, const Transform& t) {
 
 struct Builder {
     Shape operator()(const SphereDef& def) const {
-        requirePositive("SphereDef", "radius", def.radius);
+        requireSize("SphereDef", "radius", def.radius);
         Shape s;
         s.kind = ShapeKind::Sphere;
         s.radius = def.radius;
@@ -79,9 +83,9 @@ struct Builder {
     }
 
     Shape operator()(const BoxDef& def) const {
-        requirePositive("BoxDef", "halfExtents.x", def.halfExtents.x);
-        requirePositive("BoxDef", "halfExtents.y", def.halfExtents.y);
-        requirePositive("BoxDef", "halfExtents.z", def.halfExtents.z);
+        requireSize("BoxDef", "halfExtents.x", def.halfExtents.x);
+        requireSize("BoxDef", "halfExtents.y", def.halfExtents.y);
+        requireSize("BoxDef", "halfExtents.z", def.halfExtents.z);
         Shape s;
         s.kind = ShapeKind::Box;
         s.halfExtents = def.halfExtents;
@@ -90,11 +94,12 @@ struct Builder {
     }
 
     Shape operator()(const CapsuleDef& def) const {
-        requirePositive("CapsuleDef", "radius", def.radius);
+        requireSize("CapsuleDef", "radius", def.radius);
         requireFinite("CapsuleDef", "halfHeight", def.halfHeight);
         // A zero half-height is a sphere written as a capsule; allowed so tools can shrink capsules freely.
-        if (!(def.halfHeight >= 0))
-            fail("CapsuleDef", "halfHeight must be >= 0 (got " + formatNumber(def.halfHeight) + ")");
+        if (!(def.halfHeight >= 0 && def.halfHeight <= limits::kMaxShapeSize))
+            fail("CapsuleDef", "halfHeight must be in [0, " + formatNumber(limits::kMaxShapeSize) + "] m (got " +
+                                   formatNumber(def.halfHeight) + "; docs/limits.md)");
         Shape s;
         s.kind = ShapeKind::Capsule;
         s.radius = def.radius;
@@ -110,12 +115,37 @@ struct Builder {
         auto hull = std::make_shared<ConvexHull>(buildConvexHull(def.points));
         s.localBounds = emptyAabb();
         for (Vec3 v : hull->vertices) grow(s.localBounds, v);
+        // What the narrow phase can represent: contact clipping holds two faces' sides, and features are numbered
+        // in 16 bits.
+        if (hull->vertices.size() > limits::kMaxHullVertices)
+            fail("ConvexHullDef", "the hull has " + std::to_string(hull->vertices.size()) + " vertices, more than " +
+                                      std::to_string(limits::kMaxHullVertices) + " (docs/limits.md)");
+        for (std::uint32_t f = 0; f < hull->faceCount(); ++f) {
+            const std::uint32_t sides = hull->faceStart[f + 1] - hull->faceStart[f];
+            if (sides > limits::kMaxHullFaceSides)
+                fail("ConvexHullDef", "a face of the hull has " + std::to_string(sides) + " sides, more than " +
+                                          std::to_string(limits::kMaxHullFaceSides) +
+                                          " (docs/limits.md): use fewer points around its rim");
+        }
+        const Vec3 half = (s.localBounds.max - s.localBounds.min) * 0.5f;
+        const float extent = std::max({half.x, half.y, half.z});
+        const float reach =
+            std::max({std::abs(s.localBounds.min.x), std::abs(s.localBounds.min.y), std::abs(s.localBounds.min.z),
+                      s.localBounds.max.x, s.localBounds.max.y, s.localBounds.max.z});
+        if (extent < limits::kMinShapeSize || reach > limits::kMaxShapeSize)
+            fail("ConvexHullDef", "the hull's half extent " + formatNumber(extent) + " m and reach from its origin " +
+                                      formatNumber(reach) + " m must lie in [" + formatNumber(limits::kMinShapeSize) +
+                                      ", " + formatNumber(limits::kMaxShapeSize) + "] m (docs/limits.md)");
         s.hull = std::move(hull);
         return s;
     }
 
     Shape operator()(const CompoundDef& def) const {
         if (def.children.empty()) fail("CompoundDef", "children is empty: a compound needs at least one child");
+        if (def.children.size() > limits::kMaxCompoundChildren)
+            fail("CompoundDef", "children has " + std::to_string(def.children.size()) + " shapes, more than " +
+                                    std::to_string(limits::kMaxCompoundChildren) +
+                                    " (contacts name a child in 16 bits; docs/limits.md)");
         Shape s;
         s.kind = ShapeKind::Compound;
         s.localBounds = emptyAabb();
@@ -150,6 +180,19 @@ struct Builder {
     }
 
     Shape operator()(const TriangleMeshDef& def) const {
+        const std::uint64_t triangles = def.indices.size() / 3;
+        if (triangles > limits::kMaxMeshTriangles)
+            fail("TriangleMeshDef", "indices make " + std::to_string(triangles) + " triangles, more than " +
+                                        std::to_string(limits::kMaxMeshTriangles) + " (docs/limits.md)");
+        for (std::size_t i = 0; i < def.vertices.size(); ++i) {
+            const Vec3 v = def.vertices[i];
+            if (!isFinite(v)) continue;  // buildTriangleMesh names it
+            if (std::abs(v.x) > limits::kMaxCoordinate || std::abs(v.y) > limits::kMaxCoordinate ||
+                std::abs(v.z) > limits::kMaxCoordinate)
+                fail("TriangleMeshDef", "vertices[" + std::to_string(i) + "] " + describe(v) + " lies farther than " +
+                                            formatNumber(limits::kMaxCoordinate) +
+                                            " m from the origin on an axis (docs/limits.md)");
+        }
         Shape s;
         s.kind = ShapeKind::TriangleMesh;
         auto mesh = std::make_shared<TriangleMesh>(buildTriangleMesh(def));

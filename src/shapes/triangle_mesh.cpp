@@ -9,7 +9,9 @@
 #include <string_view>
 #include <vector>
 
+#include "core/file_reading.h"
 #include "rubble/error.h"
+#include "rubble/limits.h"
 #include "shapes/shape.h"
 #include "world/validation.h"
 
@@ -209,16 +211,7 @@ std::vector<std::string_view> tokens(std::string_view line) {
 }  // namespace
 
 TriangleMeshDef loadObj(const std::string& path) {
-    std::FILE* file = std::fopen(path.c_str(), "rb");
-    if (!file) throw Error("cannot open " + path + ": " + std::strerror(errno));
-    std::string text;
-    char buffer[1 << 16];
-    std::size_t got;
-    while ((got = std::fread(buffer, 1, sizeof buffer, file)) > 0) text.append(buffer, got);
-    const bool readError = std::ferror(file);
-    const int readErrno = errno;
-    std::fclose(file);
-    if (readError) throw Error("cannot read " + path + ": " + std::strerror(readErrno));
+    const std::string text = detail::readRegularFile(path, limits::kMaxObjFileBytes, "an OBJ file");
 
     TriangleMeshDef mesh;
     ObjReader reader{path};
@@ -244,6 +237,8 @@ TriangleMeshDef loadObj(const std::string& path) {
             for (std::size_t k = 1; k < t.size(); ++k) polygon.push_back(reader.faceIndex(t[k], mesh.vertices.size()));
             for (std::size_t k = 1; k + 1 < polygon.size(); ++k)
                 mesh.indices.insert(mesh.indices.end(), {polygon[0], polygon[k], polygon[k + 1]});
+            if (mesh.indices.size() / 3 > limits::kMaxMeshTriangles)
+                reader.fail("more than " + std::to_string(limits::kMaxMeshTriangles) + " triangles (docs/limits.md)");
         }
         // Everything else (vt, vn, o, g, s, usemtl, mtllib, l, p, unknown) does not shape a collision mesh.
     }

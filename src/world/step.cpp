@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "rubble/limits.h"
 #include "simd/float_mode.h"
 #include "solver/solver_stage.h"
 #include "world/step_context.h"
@@ -247,8 +248,7 @@ void finishStep(World::Impl& w, StepContext& step, detail::Clock::time_point beg
 }  // namespace
 
 void World::step(float dt) {
-    if (!std::isfinite(dt) || dt <= 0)
-        fail("World::step", "dt must be finite and > 0 (got " + std::to_string(dt) + ")");
+    requireWithin("World::step", "dt", dt, limits::kMinTimeStep, limits::kMaxTimeStep, "s");
     Impl& w = *impl_;
     // The pool's workers set the same mode for each chunk they run (parallel.cpp).
     const simd::FlushSubnormals flushSubnormals;

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "rubble/error.h"
+#include "rubble/limits.h"
 
 namespace rubble::detail {
 
@@ -47,6 +48,22 @@ Quat requireUnit(const char* where, const char* name, Quat q) {
     if (std::fabs(len - 1.0f) > 1e-3f)
         fail(where, std::string(name) + " is not a unit quaternion " + describe(q) + ", length " + std::to_string(len));
     return {q.x / len, q.y / len, q.z / len, q.w / len};
+}
+
+void requireWithin(const char* where, const char* name, float f, float lo, float hi, const char* unit) {
+    requireFinite(where, name, f);
+    if (!(f >= lo && f <= hi))
+        fail(where, std::string(name) + " must be in [" + formatNumber(lo) + ", " + formatNumber(hi) + "] " + unit +
+                        " (got " + formatNumber(f) + "; docs/limits.md)");
+}
+
+void requireInWorld(const char* where, const char* name, Vec3 v) {
+    requireFinite(where, name, v);
+    const float m = limits::kMaxCoordinate;
+    if (std::abs(v.x) > m || std::abs(v.y) > m || std::abs(v.z) > m)
+        fail(where, std::string(name) + " " + describe(v) + " lies farther than " + formatNumber(m) +
+                        " m from the origin on an axis (float spacing there is " +
+                        formatNumber(std::nextafter(m, 2 * m) - m) + " m; docs/limits.md)");
 }
 
 }  // namespace rubble::detail

@@ -19,6 +19,10 @@ std::string describe(Quat q);
 void requireFinite(const char* where, const char* name, Vec3 v);
 void requireFinite(const char* where, const char* name, float f);
 void requireNonNegative(const char* where, const char* name, float f);
+/// `f` in [lo, hi] (a limit of include/rubble/limits.h; the message names it and docs/limits.md), `unit` after it.
+void requireWithin(const char* where, const char* name, float f, float lo, float hi, const char* unit);
+/// Every coordinate within limits::kMaxCoordinate of the origin.
+void requireInWorld(const char* where, const char* name, Vec3 v);
 /// Unit quaternions are required; small drift (from user arithmetic) is normalised away, anything else refused.
 Quat requireUnit(const char* where, const char* name, Quat q);
 

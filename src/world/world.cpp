@@ -6,6 +6,7 @@
 
 #include "core/cpu_check.h"
 #include "rubble/error.h"
+#include "rubble/limits.h"
 #include "world/world_impl.h"
 
 namespace rubble {
@@ -35,8 +36,7 @@ void validateMaterial(const char* where, const Material& m) {
     requireFinite(where, "material.restitution", m.restitution);
     if (m.restitution < 0 || m.restitution > 1)
         fail(where, "material.restitution must be in [0, 1] (got " + std::to_string(m.restitution) + ")");
-    requireFinite(where, "material.density", m.density);
-    if (m.density <= 0) fail(where, "material.density must be > 0 (got " + std::to_string(m.density) + ")");
+    requireWithin(where, "material.density", m.density, limits::kMinDensity, limits::kMaxDensity, "kg/m^3");
 }
 
 const char* bodyTypeName(BodyType t) {
@@ -128,7 +128,7 @@ BodyId World::createBody(const BodyDef& def) {
         fail(kWhere, std::string("a ") + bodyTypeName(def.type) + " body cannot use shape " +
                          std::to_string(def.shape.index) +
                          ": triangle meshes and heightfields are static-only (use a hull or compound)");
-    requireFinite(kWhere, "BodyDef.position", def.position);
+    requireInWorld(kWhere, "BodyDef.position", def.position);
     const Quat q = requireUnit(kWhere, "BodyDef.orientation", def.orientation);
     requireFinite(kWhere, "BodyDef.linearVelocity", def.linearVelocity);
     requireFinite(kWhere, "BodyDef.angularVelocity", def.angularVelocity);
@@ -138,6 +138,9 @@ BodyId World::createBody(const BodyDef& def) {
     requireFinite(kWhere, "BodyDef.gravityScale", def.gravityScale);
     if (def.type == BodyType::Static && (def.linearVelocity != Vec3{} || def.angularVelocity != Vec3{}))
         fail(kWhere, "a static body cannot have a velocity (use a kinematic body to move it)");
+    if (w.bodies.count() >= limits::kMaxBodies)
+        fail(kWhere,
+             "the world holds " + std::to_string(w.bodies.count()) + " bodies, the most it may (docs/limits.md)");
 
     w.queries.bodiesChanged();
     std::uint32_t i;
@@ -322,7 +325,7 @@ void World::setTransform(BodyId id, Vec3 position, Quat orientation) {
     static constexpr const char* kWhere = "World::setTransform";
     Impl& w = *impl_;
     const BodySlot& s = w.slotOf(id, kWhere);
-    requireFinite(kWhere, "position", position);
+    requireInWorld(kWhere, "position", position);
     const Quat q = requireUnit(kWhere, "orientation", orientation);
     w.queries.bodiesChanged();
     const std::uint32_t i = s.dense;
@@ -484,21 +487,19 @@ const WorldSettings& World::settings() const { return impl_->settings; }
 void World::setSettings(const WorldSettings& s) {
     static constexpr const char* kWhere = "World::setSettings";
     requireFinite(kWhere, "settings.gravity", s.gravity);
-    requireFinite(kWhere, "settings.timeStep", s.timeStep);
+    requireWithin(kWhere, "settings.timeStep", s.timeStep, limits::kMinTimeStep, limits::kMaxTimeStep, "s");
     requireNonNegative(kWhere, "settings.contactMargin", s.contactMargin);
     requireNonNegative(kWhere, "settings.manifoldReuseDistance", s.manifoldReuseDistance);
     requireNonNegative(kWhere, "settings.contactFeatureDrift", s.contactFeatureDrift);
-    if (s.timeStep <= 0) fail(kWhere, "settings.timeStep must be > 0 (got " + std::to_string(s.timeStep) + ")");
-    if (s.substeps < 1 || s.substeps > 64)
-        fail(kWhere, "settings.substeps must be in [1, 64] (got " + std::to_string(s.substeps) + ")");
-    if (s.velocityIterations < 0 || s.velocityIterations > 1000)
-        fail(kWhere,
-             "settings.velocityIterations must be in [0, 1000] (got " + std::to_string(s.velocityIterations) + ")");
-    if (s.positionIterations < 0 || s.positionIterations > 1000)
-        fail(kWhere,
-             "settings.positionIterations must be in [0, 1000] (got " + std::to_string(s.positionIterations) + ")");
-    if (s.threads < 0 || s.threads > 1024)
-        fail(kWhere, "settings.threads must be in [0, 1024] (got " + std::to_string(s.threads) + ")");
+    const auto requireCount = [&](const char* name, int value, int lo, int hi) {
+        if (value < lo || value > hi)
+            fail(kWhere, std::string(name) + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                             "] (got " + std::to_string(value) + "; docs/limits.md)");
+    };
+    requireCount("settings.substeps", s.substeps, 1, limits::kMaxSubsteps);
+    requireCount("settings.velocityIterations", s.velocityIterations, 0, limits::kMaxIterations);
+    requireCount("settings.positionIterations", s.positionIterations, 0, limits::kMaxIterations);
+    requireCount("settings.threads", s.threads, 0, limits::kMaxThreads);
     requireNonNegative(kWhere, "settings.sleep.linearThreshold", s.sleep.linearThreshold);
     requireNonNegative(kWhere, "settings.sleep.angularThreshold", s.sleep.angularThreshold);
     requireNonNegative(kWhere, "settings.sleep.timeToSleep", s.sleep.timeToSleep);

@@ -41,8 +41,10 @@ using detail::describe;
 using detail::fail;
 using detail::MovingBodies;
 using detail::requireFinite;
+using detail::requireInWorld;
 using detail::requireNonNegative;
 using detail::requireUnit;
+using detail::requireWithin;
 using detail::rotateDiagonal;
 using detail::Shape;
 

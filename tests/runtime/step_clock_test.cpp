@@ -70,7 +70,7 @@ TEST(RuntimeClock, AThreadThatCannotKeepUpSlowsDownWithinTheCap) {
     // 400 boxes resting on a floor take far more than 5 us per step (publishing their poses alone does, even once
     // they sleep), so 200 kHz cannot be reached.
     RuntimeSettings settings;
-    settings.rate = 200000;
+    settings.rate = 100000;  // the highest rate (1 / limits::kMinTimeStep)
     settings.maxStepsPerWake = 3;
     Runtime runtime(test::boxesOnFloor(20, 1), settings);
     runtime.start();
