@@ -8,8 +8,9 @@
 namespace rubble::detail {
 namespace {
 
-/// Flat contacts converge in one or two advances and curved ones in a handful; a sweep that still has not touched
-/// after this many is grazing past with a gap above the tolerance.
+/// Flat contacts converge in one or two advances and curved ones in a handful (a grazing contact quarters its gap with
+/// each). A sweep still approaching after this many is reported as a hit where it stands: every advance is safe, so
+/// that is never past the contact, while a miss could let a caller move through it.
 constexpr int kMaxAdvances = 32;
 
 /// p lies in the closed triangle (a, b, c) of unit normal n (p is in the triangle's plane).
@@ -55,7 +56,8 @@ SweepResult sweepConvex(const GjkShape& moving, Vec3 dir, float maxT, const GjkS
         settings.initialDirection = g.normal;
         previous = g;
     }
-    return SweepResult::Miss;
+    hit = {t, previous.pointB + base, -previous.normal};
+    return SweepResult::Hit;
 }
 
 Vec3 closestPointOnTriangle(Vec3 p, Vec3 a, Vec3 b, Vec3 c) {

@@ -28,7 +28,8 @@ struct SweepHit {
 enum class SweepResult : std::uint8_t { Miss, Hit, StartsInside };
 
 /// Sweeps `moving` from its pose along unit `dir` up to `maxT` against `target` (sphere, box, capsule or hull cores).
-/// StartsInside when they already overlap (within the tolerance, hit.t = 0, hit left for the caller).
+/// StartsInside when they already overlap (within the tolerance, hit.t = 0, hit left for the caller). A sweep still
+/// approaching after its advances run out is a Hit where it stands: short of the contact, never past it.
 SweepResult sweepConvex(const GjkShape& moving, Vec3 dir, float maxT, const GjkShape& target, SweepHit& hit);
 
 /// Sphere against triangle (a, b, c), closed form: the triangle's face offset by the radius, its edges as capsules and
