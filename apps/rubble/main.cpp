@@ -317,6 +317,7 @@ int run(const Options& options) {
     if (!options.trace.empty()) trace.emplace(options.trace);  // an unwritable path fails before the run
     ProgressBar progress(steps);
     std::uint32_t frozen = 0;
+    long droppedSteps = 0;
     for (long s = 0; s < steps; ++s) {
         world.step(scene.settings.timeStep);
         figures.record(world);
@@ -325,6 +326,11 @@ int run(const Options& options) {
         for (int k = 0; k < rubble::kStageCount; ++k)
             if (p.stages[k].ran) stageMs[k].add(p.stages[k].ms);
         if (trace) trace->addStep(p);
+        if (p.droppedPairs > 0 && droppedSteps++ < 10)
+            std::fprintf(stderr,
+                         "warning: step %ld: %llu candidate pairs past the pair budget were dropped (%u kept): bodies "
+                         "are piled onto one another far past what contact can hold (docs/limits.md)\n",
+                         s, static_cast<unsigned long long>(p.droppedPairs), p.movingPairs);
         for (rubble::BodyId id : world.takeFrozenBodies()) {
             if (frozen++ < 10)
                 std::fprintf(stderr, "warning: body %u froze at step %ld: its state became non-finite\n", id.index, s);
@@ -332,6 +338,7 @@ int run(const Options& options) {
         progress.update(s + 1);
     }
     if (frozen > 10) std::fprintf(stderr, "warning: %u bodies froze in all\n", frozen);
+    if (droppedSteps > 10) std::fprintf(stderr, "warning: %ld steps dropped pairs past the budget\n", droppedSteps);
 
     const double stepMedian = stepMs.median();
     if (options.profile) {

@@ -2,6 +2,7 @@
 // Every limit Rubble has, in one place. The World refuses input outside them (rubble::Error naming the call, the
 // field and the limit) and the scene loader refuses files that cross them (naming the file and the JSON path), with
 // these same numbers. docs/limits.md says why each one is where it is.
+#include <cstddef>
 #include <cstdint>
 
 namespace rubble::limits {
@@ -24,6 +25,12 @@ inline constexpr std::uint32_t kMaxHullVertices = 4096;
 inline constexpr std::uint32_t kMaxHullFaceSides = 32;
 inline constexpr std::uint32_t kMaxCompoundChildren = 65535;
 inline constexpr std::uint64_t kMaxMeshTriangles = std::uint64_t{1} << 24;  ///< meshes and heightfields each
+
+// The step.
+/// Candidate pairs of moving bodies: each chunk of the broad phase's search keeps at most kPairsPerBody times its
+/// share of the bodies, and at least kMinChunkPairs; pairs past that are dropped and counted (Profile::droppedPairs).
+inline constexpr std::size_t kPairsPerBody = 32;
+inline constexpr std::size_t kMinChunkPairs = 16384;
 
 // Files (the scene loader).
 inline constexpr std::uint64_t kMaxSceneFileBytes = std::uint64_t{1} << 28;  ///< 256 MiB

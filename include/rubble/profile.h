@@ -43,6 +43,9 @@ struct Profile {
     std::uint32_t frozenCount = 0;  ///< bodies frozen in this step because their state became non-finite
     BroadPhaseKind broadPhase = BroadPhaseKind::Auto;  ///< algorithm that found the moving pairs (Auto: none ran)
     std::uint32_t movingPairs = 0;                     ///< candidate pairs of two moving bodies
+    /// Candidate pairs of two moving bodies found past the pair budget and dropped (docs/limits.md: bodies piled onto
+    /// one point); 0 in any scene the budget is meant for. The runner warns when it is not.
+    std::uint64_t droppedPairs = 0;
     std::uint32_t staticPairs = 0;    ///< candidate pairs of a moving and a static body (meshes excluded)
     std::uint32_t meshPairs = 0;      ///< moving bodies against static meshes and heightfields
     std::uint32_t meshTriangles = 0;  ///< triangles handed over with the mesh pairs

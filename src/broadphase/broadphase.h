@@ -3,9 +3,12 @@
 // candidate pairs. Moving-moving pairs come from sweep-and-prune or the multi-resolution grid; moving-static pairs
 // (static bodies and the triangles of static meshes and heightfields) from the static BVH. Static-static pairs
 // never exist. The final lists are in a canonical order that does not depend on the algorithm or thread count.
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "rubble/limits.h"
 #include "storage/aligned_vector.h"
 
 namespace rubble::detail {
@@ -64,6 +67,35 @@ struct PairFilter {
     }
 };
 
+/// The pair budget (docs/limits.md): a search splits its work into chunks that depend on the body count only, and
+/// each chunk keeps at most its cap of pairs; pairs past it are counted, not kept. So memory stays bounded (about
+/// 2 x kPairsPerBody pairs a body) when bodies pile onto one point, and what is kept does not depend on the threads.
+struct PairBudget {
+    std::size_t perBody = limits::kPairsPerBody;
+    std::size_t minPerChunk = limits::kMinChunkPairs;
+
+    /// For tests that check a search against brute force on piles no world would hold.
+    static PairBudget unlimited() { return {SIZE_MAX / (std::size_t{1} << 32), SIZE_MAX / (std::size_t{1} << 32)}; }
+    std::size_t chunkCap(std::size_t bodies, std::size_t chunks) const {
+        const std::size_t share = chunks > 0 ? bodies * perBody / chunks : 0;
+        return std::max(share, minPerChunk);
+    }
+};
+
+/// One chunk's pairs under the budget.
+struct ChunkPairs {
+    std::vector<BodyPair>& pairs;
+    std::size_t cap;
+    std::uint64_t dropped = 0;
+
+    void add(BodyPair p) {
+        if (pairs.size() < cap)
+            pairs.push_back(p);
+        else
+            ++dropped;
+    }
+};
+
 /// The broad phase's output.
 struct CandidatePairs {
     std::vector<BodyPair> moving;  ///< sorted by (a, b)
@@ -71,8 +103,11 @@ struct CandidatePairs {
     std::vector<BodyPair> statics;
     std::vector<MeshPair> meshes;  ///< ordered by (moving, static body slot)
     std::vector<std::uint32_t> meshTriangles;
+    /// Moving pairs found past the pair budget and not kept (docs/limits.md); 0 in any sane scene.
+    std::uint64_t droppedMoving = 0;
 
     void clear() {
+        droppedMoving = 0;
         moving.clear();
         statics.clear();
         meshes.clear();

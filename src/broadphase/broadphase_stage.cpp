@@ -188,9 +188,11 @@ void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage
         else if (lastKind_ == BroadPhaseKind::Grid && storage.layoutChanges() == layoutInCellOrder_)
             continuity = RowContinuity::InCellOrder;
         grid_->findPairs(moving, filter, pool, out.moving, continuity);
+        out.droppedMoving = grid_->droppedPairs();
     } else {
         sap_->findPairs(moving, bodies.slot.data(), static_cast<std::uint32_t>(storage.slots().size()), filter, pool,
                         out.moving);
+        out.droppedMoving = sap_->droppedPairs();
     }
     if (requested == BroadPhaseKind::Auto)
         timer_.record(

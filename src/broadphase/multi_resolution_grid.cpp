@@ -431,14 +431,16 @@ void MultiResolutionGrid::queryRows(const Layout& layout, const PairFilter& filt
     const int topLevel = occupiedLevelCount_ > 0 ? occupiedLevels_[occupiedLevelCount_ - 1] : 0;
     constexpr auto lanes = static_cast<std::uint32_t>(simd::kLanes);
 
+    const std::size_t cap = budget_.chunkCap(slotBody_.size(), chunkOutputs_.size());
     pool.forChunks(rows, chunkSize, [&](std::size_t chunk, std::size_t rBegin, std::size_t rEnd, int) {
         ChunkOutput& out = chunkOutputs_[chunk];
         out.pairs.clear();
+        ChunkPairs pairs{out.pairs, cap};
         const simd::FloatW laneIndex = simd::laneIndices<simd::FloatW>();
         auto emit = [&](std::uint32_t i, std::uint32_t j) {
             std::uint32_t a = view.body[i], b = view.body[j];
             if (a > b) std::swap(a, b);
-            if (filter.accepts(a, b)) out.pairs.push_back({a, b});
+            if (filter.accepts(a, b)) pairs.add({a, b});
         };
         // First row not below the current row's z + 1 window; the window only moves forward as rows are walked in
         // key order, so the cursor sweeps its part of the array once.
@@ -546,6 +548,7 @@ void MultiResolutionGrid::queryRows(const Layout& layout, const PairFilter& filt
                 cb = ce;
             }
         }
+        out.dropped = pairs.dropped;
     });
 }
 
@@ -577,6 +580,7 @@ bool MultiResolutionGrid::layoutStillFits(std::uint32_t n, std::uint32_t outlier
 void MultiResolutionGrid::findPairs(const Bounds& bounds, const PairFilter& filter, TaskPool& pool,
                                     std::vector<BodyPair>& out, RowContinuity continuity) {
     out.clear();
+    droppedPairs_ = 0;
     const std::uint32_t n = bounds.size();
     occupiedLevelCount_ = 0;
     cellCount_ = 0;
@@ -678,7 +682,8 @@ void MultiResolutionGrid::findPairs(const Bounds& bounds, const PairFilter& filt
     // 5-6. Pairs, concatenated in chunk order.
     queryRows(layout, filter, pool);
     std::size_t total = 0;
-    for (const ChunkOutput& c : chunkOutputs_) total += c.pairs.size();
+    droppedPairs_ = 0;
+    for (const ChunkOutput& c : chunkOutputs_) total += c.pairs.size(), droppedPairs_ += c.dropped;
     out.reserve(total);
     for (const ChunkOutput& c : chunkOutputs_) out.insert(out.end(), c.pairs.begin(), c.pairs.end());
     queryOutliers(validCount, filter, out);

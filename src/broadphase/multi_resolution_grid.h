@@ -58,6 +58,9 @@ public:
     /// re-sorts only the boxes that changed cell since the last call; the pairs are the same either way.
     void findPairs(const Bounds& bounds, const PairFilter& filter, TaskPool& pool, std::vector<BodyPair>& out,
                    RowContinuity continuity = RowContinuity::None);
+    /// Pairs the last findPairs found past the pair budget and did not keep.
+    std::uint64_t droppedPairs() const { return droppedPairs_; }
+    void setPairBudget(PairBudget budget) { budget_ = budget; }
     /// Boxes that changed cell in the last findPairs, when it re-sorted only those (else every box was sorted).
     std::uint32_t changedCells() const { return changedCells_; }
     /// Whether the last findPairs re-sorted only the boxes that changed cell.
@@ -119,6 +122,7 @@ private:
     /// What one chunk of rows found.
     struct ChunkOutput {
         std::vector<BodyPair> pairs;
+        std::uint64_t dropped = 0;
     };
     /// Cell starts of one chunk of slots, for the cell statistics: runs that straddle chunks are joined afterwards.
     struct CellRuns {
@@ -174,6 +178,8 @@ private:
     std::uint64_t tableMask_ = 0;
     int tableShift_ = 64;
     std::vector<ChunkOutput> chunkOutputs_;
+    std::uint64_t droppedPairs_ = 0;
+    PairBudget budget_;
     // The incremental re-sort: this call's items in row order, the stayers and movers of each chunk.
     AlignedVector<std::uint64_t> bodyKeys_;
     AlignedVector<std::uint64_t> kept_;

@@ -117,11 +117,11 @@ std::uint32_t laneBits(const M& m) {
 // to candidate blocks, and inlined, this path's registers push the scan loop's pointers onto the stack.
 template <class M>
 [[gnu::noinline]] void emitHits(M hit, const std::uint32_t* dense, std::uint32_t dp, const PairFilter& filter,
-                                std::vector<BodyPair>& pairs) {
+                                ChunkPairs& pairs) {
     for (std::uint32_t bits = laneBits(hit); bits != 0; bits &= bits - 1) {
         const std::uint32_t dq = dense[std::countr_zero(bits)];
         const BodyPair pair{std::min(dp, dq), std::max(dp, dq)};
-        if (filter.accepts(pair.a, pair.b)) pairs.push_back(pair);
+        if (filter.accepts(pair.a, pair.b)) pairs.add(pair);
     }
 }
 
@@ -135,7 +135,7 @@ template <class M>
 // production and over float as the reference.
 template <class F>
 void sweepRange(const SortedBoxes& boxes, std::size_t begin, std::size_t end, const PairFilter& filter,
-                std::vector<BodyPair>& pairs) {
+                ChunkPairs& pairs) {
     constexpr std::size_t L = simd::lanesOf<F>;
     const float* const axisMin = boxes.axisMin;
     const float* const uMin = boxes.uMin;
@@ -180,6 +180,7 @@ void SweepAndPrune::reset() {
 void SweepAndPrune::findPairs(const Bounds& bounds, const std::uint32_t* slotOfDense, std::uint32_t slotCount,
                               const PairFilter& filter, TaskPool& pool, std::vector<BodyPair>& out) {
     out.clear();
+    droppedPairs_ = 0;
     const std::uint32_t n = bounds.size();
     usedInsertion_ = false;
     insertionMoves_ = 0;
@@ -390,14 +391,19 @@ void SweepAndPrune::sweep(const PairFilter& filter, TaskPool& pool, std::vector<
     const std::size_t chunkSize = sweepChunkFor(n);
     const std::size_t chunks = TaskPool::chunkCount(n, chunkSize);
     if (chunkPairs_.size() < chunks) chunkPairs_.resize(chunks);  // never shrinks: the vectors keep their capacity
+    chunkDropped_.assign(chunks, 0);
+    const std::size_t cap = budget_.chunkCap(n, chunks);
     pool.forChunks(n, chunkSize, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
-        std::vector<BodyPair>& pairs = chunkPairs_[c];
-        pairs.clear();
+        chunkPairs_[c].clear();
+        ChunkPairs pairs{chunkPairs_[c], cap};
         if (scalarKernel_)
             sweepRange<float>(s, begin, end, filter, pairs);
         else
             sweepRange<simd::FloatW>(s, begin, end, filter, pairs);
+        chunkDropped_[c] = pairs.dropped;
     });
+    droppedPairs_ = 0;
+    for (const std::uint64_t d : chunkDropped_) droppedPairs_ += d;
 
     // Merge in chunk order: the output is the same sequence whatever ran where.
     pairOffsets_.assign(chunks + 1, 0);

@@ -25,6 +25,10 @@ public:
     void findPairs(const Bounds& bounds, const std::uint32_t* slotOfDense, std::uint32_t slotCount,
                    const PairFilter& filter, TaskPool& pool, std::vector<BodyPair>& out);
 
+    /// Pairs the last call found past the pair budget and did not keep.
+    std::uint64_t droppedPairs() const { return droppedPairs_; }
+    void setPairBudget(PairBudget budget) { budget_ = budget; }
+
     /// Axis swept by the last call (0 = x, 1 = y, 2 = z), -1 before the first.
     int lastAxis() const { return axis_; }
     /// Whether the last call re-sorted the kept order by insertion (true) or radix-sorted from scratch (false).
@@ -69,6 +73,9 @@ private:
     AlignedVector<std::uint32_t> denseOfSorted_;
 
     std::vector<std::vector<BodyPair>> chunkPairs_;
+    std::vector<std::uint64_t> chunkDropped_;
+    std::uint64_t droppedPairs_ = 0;
+    PairBudget budget_;
     std::vector<double> chunkMoments_;
     std::vector<std::uint32_t> chunkCounts_;
     std::vector<std::size_t> pairOffsets_;

@@ -7,10 +7,13 @@
 #include <cmath>
 #include <optional>
 #include <random>
+#include <tuple>
 
 #include "bounds/bounds.h"
 #include "broadphase/broadphase_stage.h"
 #include "core/parallel.h"
+#include "rubble/limits.h"
+#include "rubble/world.h"
 #include "storage/body_storage.h"
 #include "support/broadphase_scenarios.h"
 
@@ -311,4 +314,46 @@ TEST(BroadPhaseStage, AutoPicksTheGridForDenseSweepsAndSapForSparseOnes) {
             }
     EXPECT_FALSE(chooseBroadPhase(pyramid, BroadPhaseKind::Auto, one).decisive)
         << chooseBroadPhase(pyramid, BroadPhaseKind::Auto, one).sweepCandidatesPerBody;
+}
+
+// The pair budget (docs/limits.md): 2,000 balls created at one point make 2 million candidate pairs; the step keeps a
+// bounded number, counts the rest as dropped, completes, and keeps the same pairs on one and two threads. A dense
+// but sane pile (8,000 boxes touching in a grid, 26 neighbours each) drops nothing under either algorithm.
+TEST(PairBudget, BodiesPiledOnOnePointDegradeWithinTheBudgetAndSanePilesDropNothing) {
+    const auto pileOnAPoint = [](int threads, BroadPhaseKind kind) {
+        World world(WorldSettings{.threads = threads, .broadPhase = kind});
+        const ShapeId ball = world.createShape(SphereDef{0.5f});
+        BodyDef def;
+        def.shape = ball;
+        for (int i = 0; i < 2000; ++i) world.createBody(def);
+        world.step(1.0f / 60);
+        return std::tuple{world.lastProfile().movingPairs, world.lastProfile().droppedPairs, world.stateHash()};
+    };
+    for (const BroadPhaseKind kind : {BroadPhaseKind::SweepAndPrune, BroadPhaseKind::Grid}) {
+        const auto [kept, dropped, hash] = pileOnAPoint(1, kind);
+        EXPECT_EQ(std::uint64_t{kept} + dropped, 2000ull * 1999 / 2) << "every pair is kept or counted";
+        EXPECT_GT(dropped, 0u);
+        // At most kPairsPerBody a body per chunk, at least kMinChunkPairs a chunk: the chunks of 2,000 boxes are
+        // at most 8 (SAP, 256 boxes each) and the grid's one cell is one chunk.
+        EXPECT_LE(kept, 8 * limits::kMinChunkPairs);
+        const auto [kept2, dropped2, hash2] = pileOnAPoint(2, kind);
+        EXPECT_EQ(kept2, kept);
+        EXPECT_EQ(dropped2, dropped);
+        EXPECT_EQ(hash2, hash) << "the pairs kept do not depend on the threads";
+    }
+
+    for (const BroadPhaseKind kind : {BroadPhaseKind::SweepAndPrune, BroadPhaseKind::Grid}) {
+        World world(WorldSettings{.threads = 2, .broadPhase = kind});
+        const ShapeId box = world.createShape(BoxDef{{0.5f, 0.5f, 0.5f}});
+        BodyDef def;
+        def.shape = box;
+        for (int i = 0; i < 8000; ++i) {
+            def.position = {static_cast<float>(i % 20), static_cast<float>(i / 20 % 20), static_cast<float>(i / 400)};
+            world.createBody(def);
+        }
+        world.step(1.0f / 60);
+        EXPECT_EQ(world.lastProfile().droppedPairs, 0u) << broadPhaseName(kind);
+        // 3 x 19 x 20^2 along the axes, 6 x 19^2 x 20 along face diagonals, 4 x 19^3 along body diagonals.
+        EXPECT_EQ(world.lastProfile().movingPairs, 93556u) << broadPhaseName(kind);
+    }
 }

@@ -54,6 +54,7 @@ class MultiResolutionGridScenario : public ::testing::TestWithParam<Scenario> {}
 TEST_P(MultiResolutionGridScenario, MatchesBruteForce) {
     TaskPool pool(2);
     MultiResolutionGrid grid;
+    grid.setPairBudget(PairBudget::unlimited());  // every pair of the all-overlapping scenario, against brute force
     for (std::uint32_t n : {2000u, 5000u}) {
         const Bounds b = makeScenario(GetParam(), n, 7 + n);
         const auto expected = bruteForcePairs(b);

@@ -37,6 +37,7 @@ std::vector<BodyPair> sorted(std::vector<BodyPair> pairs) {
 // One call on a fresh instance with identity slots; the raw (unsorted) output.
 std::vector<BodyPair> findOnce(const Bounds& b, TaskPool& pool, const PairFilter& filter = {}) {
     SweepAndPrune sap;
+    sap.setPairBudget(PairBudget::unlimited());  // every pair of the all-overlapping scenario, against brute force
     const std::vector<std::uint32_t> slots = identitySlots(b.size());
     std::vector<BodyPair> out;
     sap.findPairs(b, slots.data(), b.size(), filter, pool, out);
@@ -161,6 +162,7 @@ TEST(SweepAndPrune, LargeDisorderFallsBackToRadixSort) {
     TaskPool pool(2);
     MovingWorld world(makeScenario(Scenario::Uniform, 5000, 3));
     SweepAndPrune sap;
+    sap.setPairBudget(PairBudget::unlimited());  // 3,000 boxes 1 cm apart: 100 pairs a box, past the budget
     std::vector<BodyPair> out;
     world.find(sap, pool, out);
     EXPECT_FALSE(sap.lastUsedInsertionSort());
