@@ -243,12 +243,7 @@ Measured slidingBlock(const WorldSettings& sweep, Length length) {
     const float width = static_cast<float>(copies) + 1.0f;
     Material material;
     material.friction = kFriction;
-    BodyDef groundDef;
-    groundDef.type = BodyType::Static;
-    groundDef.shape = world.createShape(BoxDef{{10.0f, 0.5f, width}});
-    groundDef.position = {0, -0.5f, 0};
-    groundDef.material = material;
-    world.createBody(groundDef);
+    addGround(world, 10.0f, width, material);
     const ShapeId cube = world.createShape(BoxDef{{kHalf, kHalf, kHalf}});
     std::vector<BodyId> blocks;
     std::vector<Vec3> starts;
@@ -372,12 +367,7 @@ Measured bounces(const WorldSettings& sweep, Length length) {
     Material bouncy;
     bouncy.friction = 0;
     bouncy.restitution = kRestitution;
-    BodyDef groundDef;
-    groundDef.type = BodyType::Static;
-    groundDef.shape = world.createShape(BoxDef{{20.0f, 0.5f, 20.0f}});
-    groundDef.position = {0, -0.5f, 0};
-    groundDef.material = bouncy;
-    world.createBody(groundDef);
+    addGround(world, 20.0f, 20.0f, bouncy);
     const ShapeId ball = world.createShape(SphereDef{kRadius});
     std::vector<BodyId> balls;
     for (int i = 0; i < copies; ++i) {

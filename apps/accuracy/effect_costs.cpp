@@ -21,11 +21,7 @@ EffectRun runScene(const EffectScene& scene, EffectSet effects, int threads, lon
     settings.threads = threads;
     settings.effects = effects;
     World world(settings);
-    BodyDef ground;
-    ground.type = BodyType::Static;
-    ground.shape = world.createShape(BoxDef{{40.0f, 0.5f, 40.0f}});
-    ground.position = {0, -0.5f, 0};
-    world.createBody(ground);
+    addGround(world, 40.0f, 40.0f);
     const ShapeId box = world.createShape(BoxDef{{0.3f, 0.3f, 0.3f}});
     const ShapeId ball = world.createShape(SphereDef{0.3f});
     std::mt19937 random(7);

@@ -17,14 +17,6 @@ double distance(Vec3 a, Vec3 b) { return static_cast<double>(rubble::length(a - 
 
 EffectSet stackingEffects() { return EffectSet{}.with(Effect::Gravity).with(Effect::Rotation).with(Effect::Friction); }
 
-BodyId addGround(World& world, float halfSize) {
-    BodyDef def;
-    def.type = BodyType::Static;
-    def.shape = world.createShape(BoxDef{{halfSize, 0.5f, halfSize}});
-    def.position = {0, -0.5f, 0};
-    return world.createBody(def);
-}
-
 /// Bodies and the poses statics puts them at; the error is the worst distance from it at the end.
 struct Structure {
     std::vector<BodyId> bodies;
@@ -43,7 +35,7 @@ Measured tower(const WorldSettings& sweep, Length length) {
     // Ten 1 m cubes built touching: each should stay where it was put.
     const int copies = copiesFor(length, 8);
     World world(withSceneEffects(sweep, stackingEffects()));
-    addGround(world, 40.0f);
+    addGround(world, 40.0f, 40.0f);
     const ShapeId cube = world.createShape(BoxDef{{0.5f, 0.5f, 0.5f}});
     Structure tower;
     for (int c = 0; c < copies; ++c)
@@ -82,7 +74,7 @@ Measured pyramidDropped(const WorldSettings& sweep, Length length) {
     constexpr float kPitch = 1.05f, kDrop = 0.03f;
     const int copies = length == Length::Full ? 3 : 1;
     World world(withSceneEffects(sweep, stackingEffects()));
-    addGround(world, 40.0f);
+    addGround(world, 40.0f, 40.0f);
     const ShapeId cube = world.createShape(BoxDef{{0.5f, 0.5f, 0.5f}});
     Structure pyramid;
     for (int c = 0; c < copies; ++c)

@@ -22,6 +22,16 @@ inline WorldSettings withSceneEffects(WorldSettings settings, EffectSet effects)
     return settings;
 }
 
+/// A static box whose top face is the plane y = 0, spanning [-halfX, halfX] x [-halfZ, halfZ].
+inline BodyId addGround(World& world, float halfX, float halfZ, const Material& material = {}) {
+    BodyDef def;
+    def.type = BodyType::Static;
+    def.shape = world.createShape(BoxDef{{halfX, 0.5f, halfZ}});
+    def.position = {0, -0.5f, 0};
+    def.material = material;
+    return world.createBody(def);
+}
+
 /// Steps the world `steps` times at its settings' time step, calling `afterStep(stepIndex)` after each; fills in
 /// the run's step count, median step time and final state hash.
 template <class AfterStep>
