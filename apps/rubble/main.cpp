@@ -19,6 +19,7 @@
 #include "rubble/runtime.h"
 #include "rubble/scene.h"
 #include "rubble/world.h"
+#include "soak_command.h"
 #include "trace_writer.h"
 
 namespace {
@@ -103,9 +104,11 @@ Options parseOptions(int argc, char** argv) {
         std::fputs(kUsage, stdout);
         std::fputs("\n", stdout);
         std::fputs(rubble::apps::kAccuracyUsage, stdout);
+        std::fputs("\n", stdout);
+        std::fputs(rubble::apps::kSoakUsage, stdout);
         std::exit(0);
     }
-    if (command != "run") usageError("unknown command '" + std::string(command) + "' (commands: run, accuracy)");
+    if (command != "run") usageError("unknown command '" + std::string(command) + "' (commands: run, accuracy, soak)");
     Options o;
     for (int i = 2; i < argc; ++i) {
         const std::string_view a = argv[i];
@@ -391,6 +394,7 @@ int run(const Options& options) {
 
 int main(int argc, char** argv) {
     if (argc >= 2 && std::string_view(argv[1]) == "accuracy") return rubble::apps::runAccuracyCommand(argc, argv);
+    if (argc >= 2 && std::string_view(argv[1]) == "soak") return rubble::apps::runSoakCommand(argc, argv);
     const Options options = parseOptions(argc, argv);
     try {
         return run(options);
