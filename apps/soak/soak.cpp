@@ -5,28 +5,22 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <variant>
+
+#include "rubble/scene.h"
 
 namespace rubble::soak {
 namespace {
 
 constexpr float kTerrainHalf = 100.0f;
-constexpr int kTerrainCells = 200;
 
-/// S3's rolling terrain (y = 2 sin(x / 8) cos(z / 8)) over 200 x 200 m, 1 m cells.
+/// S3's rolling terrain (y = 2 sin(x / 8) cos(z / 8)) over 200 x 200 m in 1 m cells, from the scene format's terrain
+/// generator.
 TriangleMeshDef terrain() {
-    TriangleMeshDef mesh;
-    for (int r = 0; r <= kTerrainCells; ++r)
-        for (int c = 0; c <= kTerrainCells; ++c) {
-            const float x = -kTerrainHalf + static_cast<float>(c), z = -kTerrainHalf + static_cast<float>(r);
-            mesh.vertices.push_back({x, 2.0f * std::sin(x / 8.0f) * std::cos(z / 8.0f), z});
-        }
-    const auto row = static_cast<std::uint32_t>(kTerrainCells + 1);
-    for (std::uint32_t r = 0; r < static_cast<std::uint32_t>(kTerrainCells); ++r)
-        for (std::uint32_t c = 0; c < static_cast<std::uint32_t>(kTerrainCells); ++c) {
-            const std::uint32_t a = r * row + c, b = a + 1, d = a + row, e = d + 1;
-            mesh.indices.insert(mesh.indices.end(), {a, d, e, a, e, b});
-        }
-    return mesh;
+    const Scene scene = parseScene(R"({"shapes": {"terrain": {"type": "mesh", "grid": {"cells": [200, 200],
+        "min": [-100, -100], "max": [100, 100], "amplitude": 2, "wavelength": 8}}}})",
+                                   "the soak's terrain");
+    return std::get<TriangleMeshDef>(scene.shapes.front());
 }
 
 double median(std::vector<double> v) {
