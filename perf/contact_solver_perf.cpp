@@ -81,7 +81,7 @@ void BM_BodyRowsGatherScatterSoA(benchmark::State& state) {
     for (std::size_t c = 0; c < 6; ++c) {
         soa[c].resize(p.velocity.size());
         for (std::size_t i = 0; i < p.velocity.size(); ++i)
-            soa[c][i] = c < 3 ? (&p.velocity[i].linear.x)[c] : (&p.velocity[i].angular.x)[c - 3];
+            soa[c][i] = c < 3 ? p.velocity[i].linear[c] : p.velocity[i].angular[c - 3];
     }
     const FloatW nudge(1e-7f);
     for (auto _ : state) {

@@ -128,7 +128,7 @@ TEST(ConvexHull, BoxWithDuplicateInteriorAndCoplanarPoints) {
     for (int a = 0; a < 3; ++a)  // face centres
         for (float s : {-1.0f, 1.0f}) {
             Vec3 p{};
-            (&p.x)[a] = s * (&h.x)[a];
+            p[a] = s * h[a];
             pts.push_back(p);
         }
     for (std::size_t i = 0; i < corners.size(); ++i)  // edge midpoints (and face diagonals' midpoints)
@@ -143,8 +143,8 @@ TEST(ConvexHull, BoxWithDuplicateInteriorAndCoplanarPoints) {
         EXPECT_EQ(hull.faceStart[f + 1] - hull.faceStart[f], 4u);
         const Vec3 n = hull.faceNormals[f];
         const int axis = std::abs(n.x) > 0.5f ? 0 : std::abs(n.y) > 0.5f ? 1 : 2;
-        EXPECT_NEAR(std::abs((&n.x)[axis]), 1.0f, 1e-6f);
-        EXPECT_NEAR(hull.faceOffsets[f], (&h.x)[axis], 1e-6f);
+        EXPECT_NEAR(std::abs(n[axis]), 1.0f, 1e-6f);
+        EXPECT_NEAR(hull.faceOffsets[f], h[axis], 1e-6f);
     }
     for (Vec3 v : hull.vertices) {
         EXPECT_EQ(std::abs(v.x), h.x);

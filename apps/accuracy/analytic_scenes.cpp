@@ -273,7 +273,7 @@ Mat3 worldInertia(const Mat3& body, Quat q) {
     Mat3 r;
     for (int c = 0; c < 3; ++c) {
         Vec3 e{};
-        (&e.x)[c] = 1;
+        e[c] = 1;
         const Vec3 col = rotate(q, e);
         r(0, c) = col.x, r(1, c) = col.y, r(2, c) = col.z;
     }

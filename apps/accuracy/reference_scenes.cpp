@@ -204,7 +204,7 @@ Measured gas(const WorldSettings& sweep, Length length) {
             def.shape = wall;
             def.material = elastic;
             Vec3 offset{};
-            (&offset.x)[axis] = sign * (half + 0.5f);
+            offset[axis] = sign * (half + 0.5f);
             def.position = offset;
             // The wall's thin axis is z: turn it onto the axis it closes.
             if (axis == 0) def.orientation = Quat::fromAxisAngle({0, 1, 0}, 1.5707964f);

@@ -56,9 +56,9 @@ MeshData unitBox() {
     for (int axis = 0; axis < 3; ++axis)
         for (float sign : {-1.0f, 1.0f}) {
             Vec3 n{}, u{}, v{};
-            (&n.x)[axis] = sign;
-            (&u.x)[(axis + 1) % 3] = 1;
-            (&v.x)[(axis + 2) % 3] = 1;
+            n[axis] = sign;
+            u[(axis + 1) % 3] = 1;
+            v[(axis + 2) % 3] = 1;
             // u x v = +axis; for the negative face swap them so every face winds counter-clockwise from outside.
             if (sign < 0) std::swap(u, v);
             addQuad(mesh, n - u - v, n + u - v, n + u + v, n - u + v, n);

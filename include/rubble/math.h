@@ -10,6 +10,11 @@ struct Vec3 {
     constexpr Vec3() = default;
     constexpr Vec3(float x_, float y_, float z_) : x(x_), y(y_), z(z_) {}
 
+    /// Component by axis (0: x, 1: y, 2: z). Reaching y or z through a pointer to x would be undefined behaviour,
+    /// and clang builds do not keep what such code meant.
+    constexpr float operator[](int axis) const { return axis == 0 ? x : (axis == 1 ? y : z); }
+    constexpr float& operator[](int axis) { return axis == 0 ? x : (axis == 1 ? y : z); }
+
     constexpr Vec3 operator+(Vec3 b) const { return {x + b.x, y + b.y, z + b.z}; }
     constexpr Vec3 operator-(Vec3 b) const { return {x - b.x, y - b.y, z - b.z}; }
     constexpr Vec3 operator-() const { return {-x, -y, -z}; }
@@ -79,8 +84,8 @@ constexpr Vec3 rotate(Quat q, Vec3 v) {
 struct Mat3 {
     Vec3 rows[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
 
-    constexpr float operator()(int r, int c) const { return (&rows[r].x)[c]; }
-    constexpr float& operator()(int r, int c) { return (&rows[r].x)[c]; }
+    constexpr float operator()(int r, int c) const { return rows[r][c]; }
+    constexpr float& operator()(int r, int c) { return rows[r][c]; }
     static constexpr Mat3 zero() {
         Mat3 m;
         m.rows[0] = m.rows[1] = m.rows[2] = {};

@@ -1,7 +1,14 @@
 // Compiled for the oldest x86-64 (CMakeLists.txt), whatever level the rest of the core is built for.
 #include "core/cpu_check.h"
 
+#if defined(__clang__)
+// glibc 2.36's header spells its return type _Bool, a C keyword clang does not accept in C++ (GCC does).
+#define _Bool bool
 #include <sys/platform/x86.h>
+#undef _Bool
+#else
+#include <sys/platform/x86.h>
+#endif
 #include <unistd.h>
 
 #include <cstdio>

@@ -5,7 +5,9 @@
 // GCC's SLP vectoriser may fuse alternating +/- lanes (the rotation matrix of a quaternion) into vfmsubadd even under
 // -ffp-contract=off, and whether it does depends on what got inlined where: the kernel's results would then change
 // with unrelated edits and differ between the build levels. Its wide loops are explicit SIMD.
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC optimize("no-tree-slp-vectorize")
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -95,7 +97,7 @@ struct UnitCube {
             hull.faceStart.push_back(static_cast<std::uint32_t>(hull.faceVertices.size()));
             for (std::uint32_t v : kFaces[f]) hull.faceVertices.push_back(v);
             Vec3 n{};
-            (&n.x)[f / 2] = f % 2 ? -1.0f : 1.0f;
+            n[f / 2] = f % 2 ? -1.0f : 1.0f;
             hull.faceNormals.push_back(n);
             hull.faceOffsets.push_back(1);
         }
@@ -120,7 +122,7 @@ HullView boxView(Vec3 half, Vec3 (&vertices)[8], float (&offsets)[6]) {
         const Vec3 u = c.hull.vertices[i];
         vertices[i] = {u.x * half.x, u.y * half.y, u.z * half.z};
     }
-    for (int f = 0; f < 6; ++f) offsets[f] = (&half.x)[f / 2];
+    for (int f = 0; f < 6; ++f) offsets[f] = half[f / 2];
     HullView v = viewOf(c.hull, c.adjacency);
     v.vertices = vertices;
     v.offsets = offsets;
@@ -704,7 +706,7 @@ GjkResult segmentBoxDistance(const Vec3 seg[2], float radius, Vec3 h, float marg
     // Face axes: the larger gap of the two ends' lower bound beyond each face.
     float faceGap = -INFINITY;
     for (int k = 0; k < 3; ++k) {
-        const float a = (&seg[0].x)[k], b = (&seg[1].x)[k], hk = (&h.x)[k];
+        const float a = seg[0][k], b = seg[1][k], hk = h[k];
         faceGap = maxf(faceGap, maxf(minf(a, b) - hk, -maxf(a, b) - hk));
     }
     if (faceGap - radius > margin) {  // a face axis already separates beyond the margin: the common early exit
@@ -1047,7 +1049,7 @@ bool collideCapsuleBox(const CapsuleSegment& capsule, const Transform& box, Vec3
     const Vec3 seg0 = c - h, seg1 = c + h;
     float faceGap = -INFINITY;
     for (int k = 0; k < 3; ++k) {
-        const float a = (&seg0.x)[k], b = (&seg1.x)[k], hk = (&half.x)[k];
+        const float a = seg0[k], b = seg1[k], hk = half[k];
         faceGap = maxf(faceGap, maxf(minf(a, b) - hk, -maxf(a, b) - hk));
     }
     if (faceGap - capsule.radius > margin) {

@@ -12,7 +12,7 @@
 namespace rubble::detail {
 namespace {
 
-float component(Vec3 v, int axis) { return (&v.x)[axis]; }
+float component(Vec3 v, int axis) { return v[axis]; }
 
 /// Clips the ray against half-spaces dot(n, x) <= offset (the faces of a box or hull) one at a time.
 class PlaneClipper {
@@ -146,7 +146,7 @@ RayResult rayBox(Vec3 half, const Ray& ray, SurfaceHit& hit) {
         ray,
         [](int plane) {
             Vec3 n;
-            (&n.x)[plane / 2] = (plane & 1) ? -1.0f : 1.0f;
+            n[plane / 2] = (plane & 1) ? -1.0f : 1.0f;
             return n;
         },
         hit);

@@ -52,7 +52,8 @@ void requireVolume(const std::vector<Vec3>& points) {
     const auto [ia, da0] = farthestFrom([&](D3 p) { return norm(p - p0); });
     if (!(da0 > 0)) fail(kDef, count + " are all the same point: a hull needs volume");
     const D3 a = toD3(points[ia]);
-    const auto [ib, length] = farthestFrom([&](D3 p) { return norm(p - a); });
+    const auto [ib, farthestLength] = farthestFrom([&](D3 p) { return norm(p - a); });
+    const double length = farthestLength;  // a structured binding cannot be captured before C++20's clang 16
     const D3 b = toD3(points[ib]);
     const D3 axis = b - a;
     const auto [ic, lineDistance] = farthestFrom([&](D3 p) { return norm(cross(axis, p - a)) / length; });

@@ -108,11 +108,11 @@ void ContactSolver::splitIntoSlabs(const Contacts& contacts, const MovingBodies&
     const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
     const float* coordinate = axis == 0 ? m.px.data() : (axis == 1 ? m.py.data() : m.pz.data());
     slabKeys_.resize(slabPlaces_.size());
-    for (std::size_t i = 0; i < slabPlaces_.size(); ++i) slabKeys_[i] = (&slabPlaces_[i].x)[axis];
+    for (std::size_t i = 0; i < slabPlaces_.size(); ++i) slabKeys_[i] = slabPlaces_[i][axis];
     const auto middle = slabKeys_.begin() + static_cast<std::ptrdiff_t>(slabKeys_.size() / 2);
     std::nth_element(slabKeys_.begin(), middle, slabKeys_.end());
     const float cut = *middle;
-    if (!(cut > (&lo.x)[axis] && cut <= (&hi.x)[axis])) {  // every place the same (or not finite): nothing to cut
+    if (!(cut > lo[axis] && cut <= hi[axis])) {  // every place the same (or not finite): nothing to cut
         appendLarge(largePart_.data(), largePart_.size());
         return;
     }

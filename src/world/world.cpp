@@ -15,8 +15,8 @@ namespace detail {
 void rotateDiagonal(Quat r, Vec3 d, float out[6]) {
     const Vec3 c0 = rotate(r, {1, 0, 0}), c1 = rotate(r, {0, 1, 0}), c2 = rotate(r, {0, 0, 1});
     auto entry = [&](int i, int j) {
-        const float ri[3] = {(&c0.x)[i], (&c1.x)[i], (&c2.x)[i]};
-        const float rj[3] = {(&c0.x)[j], (&c1.x)[j], (&c2.x)[j]};
+        const float ri[3] = {c0[i], c1[i], c2[i]};
+        const float rj[3] = {c0[j], c1[j], c2[j]};
         return ri[0] * d.x * rj[0] + ri[1] * d.y * rj[1] + ri[2] * d.z * rj[2];
     };
     out[0] = entry(0, 0);

@@ -146,7 +146,7 @@ Vec3 randomHalf(std::mt19937& rng) {
         const bool slab = std::uniform_int_distribution<int>(0, 1)(rng) == 1;
         const float big = u(rng) * 2, small = big / 20;
         h = slab ? Vec3{big, big, big} : Vec3{small, small, small};
-        (&h.x)[axis] = slab ? small : big;
+        h[axis] = slab ? small : big;
     }
     return h;
 }
