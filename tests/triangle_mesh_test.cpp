@@ -167,6 +167,20 @@ TEST(Obj, AcceptsEveryFaceFormAndRelativeIndices) {
     EXPECT_EQ(crlf.indices, (std::vector<std::uint32_t>{0, 2, 3, 0, 3, 1}));
 }
 
+TEST(Obj, TextInMemoryReadsAsItsFileDoes) {
+    const TriangleMeshDef fromFile = loadObj(kObjDir + "forms.obj");
+    const TriangleMeshDef fromText = parseObj(
+        "v -1 0 -1\nv +1.0 0 -1\nv 1 0.25e0 1 # c\nv -1 0 1\nf 1 4 3\nf 1 3 2\nf 1 2 3\nf -4 -1 -2\n", "inline.obj");
+    EXPECT_EQ(fromText.vertices, fromFile.vertices);
+    EXPECT_EQ(fromText.indices, fromFile.indices);
+    try {
+        parseObj("v 0 0 0\nf 1 2 3\n", "archive/mesh.obj");
+        ADD_FAILURE() << "a face past the vertices was accepted";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "archive/mesh.obj:2: face index 2 is out of range (1 vertices)");
+    }
+}
+
 TEST(Obj, MalformedFilesNameFileAndLine) {
     const std::string d = kObjDir;
     EXPECT_EQ(loadError(d + "terrain.obj"), d + "terrain.obj:35: face index 40 is out of range (32 vertices)");

@@ -3,6 +3,7 @@
 // Sizes are in metres; every shape's local frame has y up.
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -64,6 +65,9 @@ using ShapeDef =
 /// Reads a Wavefront OBJ file (v and f lines; polygons are fan-triangulated; v/vt/vn and negative indices are
 /// accepted). Throws rubble::Error naming the file and line on malformed input.
 TriangleMeshDef loadObj(const std::string& path);
+/// Same, from OBJ text in memory (a mesh from an archive or a network message); `sourceName` stands for the file in
+/// messages.
+TriangleMeshDef parseObj(std::string_view text, const std::string& sourceName);
 
 /// Mass properties of a solid of the given shape and density.
 struct MassProperties {

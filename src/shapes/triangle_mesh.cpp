@@ -211,10 +211,15 @@ std::vector<std::string_view> tokens(std::string_view line) {
 }  // namespace
 
 TriangleMeshDef loadObj(const std::string& path) {
-    const std::string text = detail::readRegularFile(path, limits::kMaxObjFileBytes, "an OBJ file");
+    return parseObj(detail::readRegularFile(path, limits::kMaxObjFileBytes, "an OBJ file"), path);
+}
 
+TriangleMeshDef parseObj(std::string_view text, const std::string& sourceName) {
+    if (text.size() > limits::kMaxObjFileBytes)
+        throw Error(sourceName + ": larger than " + std::to_string(limits::kMaxObjFileBytes >> 20) +
+                    " MiB, the most an OBJ file may be (docs/limits.md)");
     TriangleMeshDef mesh;
-    ObjReader reader{path};
+    ObjReader reader{sourceName};
     std::string_view rest = text;
     std::vector<std::uint32_t> polygon;
     while (!rest.empty()) {
@@ -242,7 +247,7 @@ TriangleMeshDef loadObj(const std::string& path) {
         }
         // Everything else (vt, vn, o, g, s, usemtl, mtllib, l, p, unknown) does not shape a collision mesh.
     }
-    if (mesh.indices.empty()) throw Error(path + ": no faces (a triangle mesh needs at least one 'f' line)");
+    if (mesh.indices.empty()) throw Error(sourceName + ": no faces (a triangle mesh needs at least one 'f' line)");
     return mesh;
 }
 
