@@ -58,7 +58,7 @@ const BadFile kBadFiles[] = {
     {"bad_quaternion.json", {"at /bodies/0/rotation: quaternion must have unit length (got length 2)"}},
     {"bad_effect.json", {"at /settings/effects/0: unknown effect 'gravty' (did you mean 'gravity'?)"}},
     {"bad_mesh_index.json", {"at /shapes/tri/indices/2: must be <= 2 (got 7)"}},
-    {"bad_flat_hull.json", {"at /shapes/plate/points:", "do not span a volume"}},
+    {"bad_flat_hull.json", {"at /shapes/plate/points:", "the 5 points are coplanar: a hull needs volume"}},
     {"bad_steps.json", {"at /steps: expected an integer, got 2.5"}},
     {"bad_missing_obj.json", {"at /shapes/terrain/obj:", "no_such_terrain.obj"}},
     {"bad_compound_child.json", {"at /shapes/thing/children/1/shape/type:", "compound child must be"}},

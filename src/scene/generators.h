@@ -18,6 +18,15 @@ inline constexpr std::uint64_t kMaxBodies = limits::kMaxSceneBodies;
 /// Largest number of triangles a generated terrain may have.
 inline constexpr std::uint64_t kMaxTerrainTriangles = 10'000'000;
 
+/// How much a scene may ask its generators for. Files are held to the limits above; the scene fuzzer holds its inputs
+/// to a few thousand so that each runs in milliseconds, through the same checks.
+struct SceneCaps {
+    std::uint64_t bodies = kMaxBodies;
+    std::uint64_t terrainTriangles = kMaxTerrainTriangles;
+};
+/// parseScene with other caps.
+Scene parseSceneWithin(std::string_view text, const std::string& sourceName, const SceneCaps& caps);
+
 /// Every generated body starts as a copy of a template (material, type, filter, velocities, ...); generators set the
 /// position, the shape (cycled through `shapes` by creation index within the generator) and, for random, velocity.
 struct GeneratorCommon {

@@ -537,6 +537,7 @@ struct Builder {
     std::unordered_map<std::string, Material> materials;
     std::vector<std::string> materialNames;  // in file order, for messages
     std::unordered_map<std::string, std::uint32_t> shapeIndex;
+    scene_detail::SceneCaps caps;
 
     Loc root() const { return {&file, ""}; }
 
@@ -711,43 +712,6 @@ Material Builder::materialRef(const Json& j, const Loc& at) const {
     return it->second;
 }
 
-/// Cheap check that a point cloud spans a volume (the shape builder does the exact test).
-bool spansVolume(const std::vector<Vec3>& p) {
-    if (p.size() < 4) return false;
-    double scale = 0;
-    for (const Vec3& v : p)
-        scale = std::max({scale, double(std::fabs(v.x)), double(std::fabs(v.y)), double(std::fabs(v.z))});
-    const double eps = 1e-6 * std::max(scale, 1e-30);
-    auto sub = [](Vec3 a, Vec3 b) {
-        return std::array<double, 3>{double(a.x) - b.x, double(a.y) - b.y, double(a.z) - b.z};
-    };
-    auto len = [](const std::array<double, 3>& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); };
-    auto crossD = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
-        return std::array<double, 3>{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-    };
-    std::size_t i1 = 0;
-    for (std::size_t i = 1; i < p.size() && !i1; ++i)
-        if (len(sub(p[i], p[0])) > eps) i1 = i;
-    if (!i1) return false;
-    const auto e1 = sub(p[i1], p[0]);
-    std::size_t i2 = 0;
-    std::array<double, 3> normal{};
-    for (std::size_t i = 1; i < p.size() && !i2; ++i) {
-        const auto c = crossD(e1, sub(p[i], p[0]));
-        if (len(c) > eps * len(e1)) {
-            i2 = i;
-            normal = c;
-        }
-    }
-    if (!i2) return false;
-    const double nl = len(normal);
-    for (const Vec3& v : p) {
-        const auto d = sub(v, p[0]);
-        if (std::fabs(d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]) / nl > eps) return true;
-    }
-    return false;
-}
-
 std::vector<Vec3> getPoints(const Json& j, const Loc& at, std::string_view what) {
     const Json& arr = expectArray(j, at, what);
     std::vector<Vec3> points;
@@ -788,7 +752,13 @@ ShapeDef Builder::parseShape(const Json& j, const Loc& at, bool childOnly, const
         ConvexHullDef hull{getPoints(j["points"], at / "points", "an array of [x, y, z] points")};
         if (hull.points.size() < 4)
             (at / "points").fail("a hull needs at least 4 points (got " + std::to_string(hull.points.size()) + ")");
-        if (!spansVolume(hull.points)) (at / "points").fail("the points do not span a volume (all on one plane)");
+        // The World's own build decides (flat, collinear or too many corners), so that a scene the loader accepts
+        // is one the World takes.
+        try {
+            computeMassProperties(hull, 1.0f);
+        } catch (const Error& e) {
+            (at / "points").fail(e.what());
+        }
         return hull;
     }
     if (childOnly)
@@ -867,9 +837,9 @@ ShapeDef Builder::parseShape(const Json& j, const Loc& at, bool childOnly, const
             p.cells[0] = static_cast<std::uint32_t>(getInt(gj["cells"][0], cl / 0, 1, 1'000'000'000));
             p.cells[1] = static_cast<std::uint32_t>(getInt(gj["cells"][1], cl / 1, 1, 1'000'000'000));
             const double triangles = 2.0 * p.cells[0] * p.cells[1];
-            if (triangles > static_cast<double>(scene_detail::kMaxTerrainTriangles))
+            if (triangles > static_cast<double>(caps.terrainTriangles))
                 cl.fail("would make " + formatCount(triangles) + " triangles, more than the limit of " +
-                        std::to_string(scene_detail::kMaxTerrainTriangles));
+                        std::to_string(caps.terrainTriangles));
             getDoubles(gj["min"], g / "min", p.min, Sign::Any, false);
             getDoubles(gj["max"], g / "max", p.max, Sign::Any, false);
             for (std::size_t a = 0; a < 2; ++a)
@@ -996,9 +966,9 @@ void Builder::parseBodyFields(const Json& j, const Loc& at, std::string_view typ
 
 void Builder::reserveBodies(double count, const Loc& at) const {
     const double total = static_cast<double>(scene.bodies.size()) + count;
-    if (total > static_cast<double>(scene_detail::kMaxBodies))
+    if (total > static_cast<double>(caps.bodies))
         at.fail("would make the scene " + formatCount(total) + " bodies, more than the limit of " +
-                std::to_string(scene_detail::kMaxBodies));
+                std::to_string(caps.bodies));
 }
 
 void Builder::parseBodies(const Json& j, const Loc& at) {
@@ -1325,7 +1295,15 @@ void Builder::parseJoints(const Json& j, const Loc& at) {
 }  // namespace
 
 Scene parseScene(std::string_view text, const std::string& sourceName) {
+    return scene_detail::parseSceneWithin(text, sourceName, scene_detail::SceneCaps{});
+}
+
+Scene scene_detail::parseSceneWithin(std::string_view text, const std::string& sourceName, const SceneCaps& caps) {
+    if (text.size() > limits::kMaxSceneFileBytes)
+        throw Error(sourceName + ": larger than " + std::to_string(limits::kMaxSceneFileBytes >> 20) +
+                    " MiB, the most a scene file may be (docs/limits.md)");
     Builder b;
+    b.caps = caps;
     b.file = sourceName;
     b.dir = std::filesystem::path(sourceName).parent_path();
     b.scene.source = sourceName;
