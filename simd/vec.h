@@ -67,6 +67,12 @@ template <class F>
 MaskOf<F> isFinite(const Vec3W<F>& v) {
     return andMask(andMask(isFinite(v.x), isFinite(v.y)), isFinite(v.z));
 }
+/// Lanes whose every component lies in [-limit, limit] (never a NaN lane).
+template <class F>
+MaskOf<F> isWithin(const Vec3W<F>& v, float limit) {
+    const F l(limit);
+    return andMask(andMask(abs(v.x) <= l, abs(v.y) <= l), abs(v.z) <= l);
+}
 template <class F>
 Vec3W<F> min(const Vec3W<F>& a, const Vec3W<F>& b) {
     return {simd::min(a.x, b.x), simd::min(a.y, b.y), simd::min(a.z, b.z)};

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "rubble/error.h"
+#include "rubble/limits.h"
 #include "rubble/world.h"
 #include "storage/body_storage.h"
 #include "support/error_of.h"
@@ -277,6 +278,32 @@ TEST(WorldStep, NonFiniteStateFreezesTheBodyAndReportsIt) {
     EXPECT_TRUE(isFinite(world.position(bad)));
     EXPECT_EQ(world.position(bad).x, 5.0f);
     EXPECT_EQ(world.lastProfile().frozenCount, 1u);
+}
+
+// A body the simulation carries past the coordinate limit (docs/limits.md) is frozen where it last was inside it and
+// reported once, as a non-finite one is; a body inside goes on moving.
+TEST(WorldStep, ABodyLeavingTheCoordinateLimitIsFrozenAtItsEdge) {
+    World world(WorldSettings{.gravity = {0, 0, 0}});
+    const ShapeId box = world.createShape(BoxDef{});
+    const BodyId stays = world.createBody(dynamicBox(box, {0, 0, 0}));
+    world.setLinearVelocity(stays, {0, 0, 1});
+    const BodyId leaves = world.createBody(dynamicBox(box, {0, 0, limits::kMaxCoordinate - 100}));
+    world.setLinearVelocity(leaves, {0, 0, 1000});  // 16.7 m a step: over the edge in the seventh
+    std::vector<BodyId> reported;
+    int frozenAt = -1;
+    for (int step = 0; step < 20; ++step) {
+        world.step(1.0f / 60);
+        const std::vector<BodyId> frozen = world.takeFrozenBodies();
+        reported.insert(reported.end(), frozen.begin(), frozen.end());
+        if (frozenAt < 0 && world.isFrozen(leaves)) frozenAt = step;
+    }
+    EXPECT_EQ(reported, std::vector<BodyId>{leaves});
+    EXPECT_EQ(frozenAt, 6);
+    EXPECT_LE(world.position(leaves).z, limits::kMaxCoordinate);
+    EXPECT_GT(world.position(leaves).z, limits::kMaxCoordinate - 1000.0f / 60);
+    EXPECT_EQ(world.linearVelocity(leaves).z, 0.0f);
+    EXPECT_FALSE(world.isFrozen(stays));
+    EXPECT_NEAR(world.position(stays).z, 20.0f / 60, 1e-4f);
 }
 
 // A body whose state goes non-finite is frozen and reported, and the rest of the world moves bit for bit as it would

@@ -336,7 +336,10 @@ int run(const Options& options) {
                          s, static_cast<unsigned long long>(p.droppedPairs), p.movingPairs);
         for (rubble::BodyId id : world.takeFrozenBodies()) {
             if (frozen++ < 10)
-                std::fprintf(stderr, "warning: body %u froze at step %ld: its state became non-finite\n", id.index, s);
+                std::fprintf(
+                    stderr,
+                    "warning: body %u froze at step %ld: its state became non-finite or left the coordinate limit\n",
+                    id.index, s);
         }
         progress.update(s + 1);
     }

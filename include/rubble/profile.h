@@ -40,7 +40,7 @@ struct Profile {
     EffectSet effects;              ///< effects that were simulated in this step
     std::uint32_t bodyCount = 0;    ///< bodies in the world, static ones included
     std::uint32_t movingCount = 0;  ///< dynamic and kinematic bodies
-    std::uint32_t frozenCount = 0;  ///< bodies frozen in this step because their state became non-finite
+    std::uint32_t frozenCount = 0;  ///< bodies frozen in this step: state non-finite, or leaving the coordinate limit
     BroadPhaseKind broadPhase = BroadPhaseKind::Auto;  ///< algorithm that found the moving pairs (Auto: none ran)
     std::uint32_t movingPairs = 0;                     ///< candidate pairs of two moving bodies
     /// Candidate pairs of two moving bodies found past the pair budget and dropped (docs/limits.md: bodies piled onto

@@ -70,7 +70,8 @@ public:
     Material material(BodyId id) const;
     CollisionFilter filter(BodyId id) const;
     std::uint64_t userData(BodyId id) const;
-    /// True when the body's state went non-finite and the world stopped simulating it.
+    /// True when the body's state went non-finite, or its motion would have carried it past the coordinate limit
+    /// (include/rubble/limits.h), and the world stopped simulating it (where it last was, at rest).
     bool isFrozen(BodyId id) const;
     /// False while the body sleeps with its island (Effect::Sleeping) and for static bodies; true otherwise.
     bool isAwake(BodyId id) const;
@@ -137,7 +138,7 @@ public:
     /// Motor of a hinge: enables or disables it and sets its speed (rad/s) and torque limit (N m, >= 0).
     void setHingeMotor(JointId id, bool enable, float speed, float maxTorque);
 
-    /// Bodies frozen because their state went non-finite, since the last call.
+    /// Bodies frozen (non-finite, or leaving the coordinate limit: isFrozen) since the last call.
     std::vector<BodyId> takeFrozenBodies();
 
     /// 64-bit hash of the state of every body (pose and velocities, bit for bit), in slot order.

@@ -25,6 +25,7 @@
 #include <cstddef>
 
 #include "core/parallel.h"
+#include "rubble/limits.h"
 #include "simd/simd.h"
 #include "simd/vec.h"
 
@@ -319,7 +320,9 @@ RUBBLE_FLATTEN MaskOf<F> positionKernel(MovingBodies& b, const IntegrationParams
     Vec3W<F> v = load3<F>(b.vx, b.vy, b.vz, i);
     if constexpr (Offsets) v += Vec3W<F>::load(s.dx.data(), s.dy.data(), s.dz.data(), i);
     const Vec3W<F> x1 = x0 + v * dt;
-    const MaskOf<F> ok = isFinite(x1);
+    // A body leaving the coordinate limit (docs/limits.md) is frozen there as a non-finite one is: farther out, float
+    // spacing exceeds the contact slop and the broad phase's cells lose their meaning.
+    const MaskOf<F> ok = isWithin(x1, limits::kMaxCoordinate);
     if (!params.rotation) {
         store3(b.px, b.py, b.pz, i, select(ok, x1, x0));
         return simd::notMask(ok);
