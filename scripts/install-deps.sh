@@ -5,6 +5,7 @@ packages=(cmake ninja-build g++ ccache clang-format pkg-config
           libtbb-dev libxsimd-dev libeigen3-dev libqhull-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev
           libccd-dev   # libccd: an independent collision library, used only by tests as an oracle
           gnuplot-nox  # the accuracy report's plots (rubble accuracy)
+          clang libclang-rt-14-dev  # the fuzz targets: libFuzzer and the sanitizers' runtimes for clang (scripts/fuzz.sh)
           # The viewer: GLFW windows, libepoxy as the OpenGL loader, Dear ImGui (its static library carries the
           # glfw and opengl3 backends; it brings libstb, whose stb_image_write writes the screenshots), and Xvfb with
           # Mesa's software renderer (llvmpipe: OpenGL 4.5 core) for the headless screenshot tests.
