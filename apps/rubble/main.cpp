@@ -334,6 +334,11 @@ int run(const Options& options) {
                          "warning: step %ld: %llu candidate pairs past the pair budget were dropped (%u kept): bodies "
                          "are piled onto one another far past what contact can hold (docs/limits.md)\n",
                          s, static_cast<unsigned long long>(p.droppedPairs), p.movingPairs);
+        if (p.droppedStaticHits > 0 && droppedSteps++ < 10)
+            std::fprintf(stderr,
+                         "warning: step %ld: %llu static candidates past the static budget were dropped: static bodies "
+                         "or mesh triangles are piled far past what contact can hold (docs/limits.md)\n",
+                         s, static_cast<unsigned long long>(p.droppedStaticHits));
         for (rubble::BodyId id : world.takeFrozenBodies()) {
             if (frozen++ < 10)
                 std::fprintf(

@@ -31,6 +31,11 @@ inline constexpr std::uint64_t kMaxMeshTriangles = std::uint64_t{1} << 24;  ///<
 /// share of the bodies, and at least kMinChunkPairs; pairs past that are dropped and counted (Profile::droppedPairs).
 inline constexpr std::size_t kPairsPerBody = 32;
 inline constexpr std::size_t kMinChunkPairs = 16384;
+/// Static candidates near moving bodies (static bodies and mesh or heightfield triangles in each body's query box):
+/// each chunk of the static query keeps at most kStaticHitsPerBody times its bodies, and at least
+/// kMinChunkStaticHits; the rest are dropped and counted (Profile::droppedStaticHits).
+inline constexpr std::size_t kStaticHitsPerBody = 64;
+inline constexpr std::size_t kMinChunkStaticHits = 65536;
 
 // Files (the scene loader).
 inline constexpr std::uint64_t kMaxSceneFileBytes = std::uint64_t{1} << 28;  ///< 256 MiB

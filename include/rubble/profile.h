@@ -46,6 +46,9 @@ struct Profile {
     /// Candidate pairs of two moving bodies found past the pair budget and dropped (docs/limits.md: bodies piled onto
     /// one point); 0 in any scene the budget is meant for. The runner warns when it is not.
     std::uint64_t droppedPairs = 0;
+    /// Static bodies and mesh triangles near moving bodies past the static budget and dropped (docs/limits.md: static
+    /// bodies piled onto one point); 0 in any scene the budget is meant for. The runner warns when it is not.
+    std::uint64_t droppedStaticHits = 0;
     std::uint32_t staticPairs = 0;    ///< candidate pairs of a moving and a static body (meshes excluded)
     std::uint32_t meshPairs = 0;      ///< moving bodies against static meshes and heightfields
     std::uint32_t meshTriangles = 0;  ///< triangles handed over with the mesh pairs

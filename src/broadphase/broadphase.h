@@ -105,9 +105,12 @@ struct CandidatePairs {
     std::vector<std::uint32_t> meshTriangles;
     /// Moving pairs found past the pair budget and not kept (docs/limits.md); 0 in any sane scene.
     std::uint64_t droppedMoving = 0;
+    /// Static candidates past the static budget and not kept (docs/limits.md); 0 in any sane scene.
+    std::uint64_t droppedStatic = 0;
 
     void clear() {
         droppedMoving = 0;
+        droppedStatic = 0;
         moving.clear();
         statics.clear();
         meshes.clear();

@@ -209,6 +209,7 @@ void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage
         staticFilter.staticCategory = staticCategory_.data();
         staticFilter.staticMask = staticMask_.data();
         bvh_->query(moving, staticFilter, pool, out.statics, out.meshes, out.meshTriangles);
+        out.droppedStatic = bvh_->droppedHits();
         // The BVH speaks in stable slots; the narrow phase wants dense rows of StaticBodies.
         const auto& slots = storage.slots();
         for (BodyPair& p : out.statics) p.b = slots[p.b].dense;

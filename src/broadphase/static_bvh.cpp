@@ -759,6 +759,7 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
     bodyPairs.clear();
     meshPairs.clear();
     meshTriangles.clear();
+    droppedHits_ = 0;
     const std::uint32_t n = moving.size();
     if (n == 0 || treeViews_.empty()) return;
 
@@ -792,8 +793,12 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
         };
         // The kept lists are rewritten only when some awake body left its grown box: a resting chunk copies nothing.
         bool rewrite = !keptValid;
+        // The budget bounds the kept lists, and with them every output: static bodies piled onto one point would
+        // otherwise hand each moving body near them the whole pile.
+        const std::size_t cap = std::max((end - begin) * budgetPerBody_, budgetMinPerChunk_);
         for (auto i = std::uint32_t(begin); i < end && !rewrite; ++i)
             rewrite = !mf.asleep(i) && !contains(out.grown[i - begin], boxOf(i));
+        if (rewrite) out.keptDropped = 0;
         out.keptNext.clear();
         for (auto i = std::uint32_t(begin); i < end; ++i) {
             const std::size_t local = i - begin;
@@ -831,6 +836,13 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
                                        out.keptNext.end());
                     // A grown box with a NaN contains no box, so such a body walks the tree every step.
                     out.grown[local] = grown;
+                }
+                if (out.keptNext.size() > cap) {
+                    // Past the budget the body keeps its lowest keys (a choice that depends on nothing but the
+                    // world), and looks again at every rewrite, in case the room came back.
+                    out.keptDropped += out.keptNext.size() - cap;
+                    out.keptNext.resize(cap);
+                    out.grown[local] = kNoBox;
                 }
                 // keptStart[local + 1] is still the old list's end, which the next body reads before rewriting it.
                 out.keptStart[local] = std::uint32_t(first);
@@ -884,6 +896,7 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
     // Merge in chunk order: the output is the same for any thread count.
     std::size_t bodyTotal = 0, meshTotal = 0, triangleTotal = 0;
     for (std::size_t c = 0; c < chunkCount; ++c) {
+        droppedHits_ += chunks_[c].keptDropped;
         bodyTotal += chunks_[c].bodyPairs.size();
         meshTotal += chunks_[c].meshPairs.size();
         triangleTotal += chunks_[c].triangles.size();

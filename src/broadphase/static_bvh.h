@@ -151,6 +151,14 @@ public:
     void query(const Bounds& moving, const StaticQueryFilter& filter, TaskPool& pool, std::vector<BodyPair>& bodyPairs,
                std::vector<MeshPair>& meshPairs, std::vector<std::uint32_t>& meshTriangles);
 
+    /// Static candidates the last query dropped past the budget (limits::kStaticHitsPerBody); 0 in any sane scene.
+    std::uint64_t droppedHits() const { return droppedHits_; }
+    /// The budget per chunk of moving bodies: at most perBody times the chunk's bodies, at least minPerChunk.
+    void setBudget(std::size_t perBody, std::size_t minPerChunk) {
+        budgetPerBody_ = perBody;
+        budgetMinPerChunk_ = minPerChunk;
+    }
+
     /// Live primitives (tombstones left out, inserts not yet in a part counted).
     std::uint32_t primitiveCount() const;
     bool empty() const { return primitiveCount() == 0; }
@@ -180,6 +188,7 @@ private:
         std::vector<Aabb> grown;               ///< per body of the chunk: the box its hits were found for
         std::vector<std::uint32_t> keptStart;  ///< per body of the chunk + 1: its range of kept, by key
         std::vector<KeptHit> kept, keptNext;   ///< this step's list is built in keptNext, then swapped
+        std::uint64_t keptDropped = 0;         ///< hits the kept lists lack for the budget
     };
     struct WorkerScratch {
         std::vector<std::uint64_t> hits;  ///< (body << 32) | triangle of one moving box
@@ -216,6 +225,9 @@ private:
     std::uint64_t generation_ = 1;  ///< changes with every edit: kept query hits of another generation are stale
     std::vector<ChunkOutput> chunks_;
     std::vector<WorkerScratch> workers_;
+    std::size_t budgetPerBody_ = limits::kStaticHitsPerBody;
+    std::size_t budgetMinPerChunk_ = limits::kMinChunkStaticHits;
+    std::uint64_t droppedHits_ = 0;
 };
 
 /// Appends the primitives of a static body: one per triangle (world boxes of the posed vertices) for meshes and

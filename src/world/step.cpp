@@ -139,6 +139,7 @@ void findContacts(World::Impl& w, StepContext& step) {
     profile.broadPhase = w.broadPhase.lastKind();
     profile.movingPairs = static_cast<std::uint32_t>(w.pairs.moving.size());
     profile.droppedPairs = w.pairs.droppedMoving;
+    profile.droppedStaticHits = w.pairs.droppedStatic;
     profile.staticPairs = static_cast<std::uint32_t>(w.pairs.statics.size());
     profile.meshPairs = static_cast<std::uint32_t>(w.pairs.meshes.size());
     profile.meshTriangles = static_cast<std::uint32_t>(w.pairs.meshTriangles.size());

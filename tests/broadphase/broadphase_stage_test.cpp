@@ -357,3 +357,55 @@ TEST(PairBudget, BodiesPiledOnOnePointDegradeWithinTheBudgetAndSanePilesDropNoth
         EXPECT_EQ(world.lastProfile().movingPairs, 93556u) << broadPhaseName(kind);
     }
 }
+
+// The static budget (docs/limits.md): 70,000 static balls created at one point hand a ball dropped into them 70,000
+// static candidates; it keeps kMinChunkStaticHits of them (one moving body is one chunk), counts the rest as dropped
+// and completes, the same on one and two threads. A large box on a fine heightfield, which holds some 20,000
+// triangles in its query box, is what the per-chunk floor is for: nothing is dropped.
+TEST(PairBudget, StaticBodiesPiledOnOnePointDegradeWithinTheStaticBudget) {
+    const auto dropInto = [](int threads) {
+        World world(WorldSettings{.threads = threads});
+        const ShapeId sphere = world.createShape(SphereDef{0.5f});
+        BodyDef pile;
+        pile.type = BodyType::Static;
+        pile.shape = sphere;
+        for (int i = 0; i < 70000; ++i) world.createBody(pile);
+        BodyDef falling;
+        falling.shape = sphere;
+        falling.position = {0, 0.8f, 0};
+        const BodyId ball = world.createBody(falling);
+        std::vector<std::uint64_t> dropped;
+        for (int step = 0; step < 3; ++step) {
+            // Held in the pile, which pushes it out: every step sees the whole pile around it.
+            world.setTransform(ball, falling.position, Quat{});
+            world.setLinearVelocity(ball, {0, 0, 0});
+            world.step(1.0f / 60);
+            EXPECT_EQ(world.lastProfile().staticPairs, limits::kMinChunkStaticHits);
+            dropped.push_back(world.lastProfile().droppedStaticHits);
+        }
+        return std::pair{dropped, world.stateHash()};
+    };
+    const auto [dropped, hash] = dropInto(1);
+    EXPECT_EQ(dropped, std::vector<std::uint64_t>(3, 70000 - limits::kMinChunkStaticHits));
+    const auto [dropped2, hash2] = dropInto(2);
+    EXPECT_EQ(dropped2, dropped);
+    EXPECT_EQ(hash2, hash) << "the candidates kept do not depend on the threads";
+
+    World world;
+    HeightfieldDef field;
+    field.rows = field.columns = 201;
+    field.heights.assign(201 * 201, 0.0f);
+    field.spacing = {0.1f, 1, 0.1f};
+    BodyDef ground;
+    ground.type = BodyType::Static;
+    ground.shape = world.createShape(field);
+    ground.position = {-10, 0, -10};
+    world.createBody(ground);
+    BodyDef box;
+    box.shape = world.createShape(BoxDef{{4, 0.5f, 4}});
+    box.position = {0, 0.5f, 0};
+    world.createBody(box);
+    world.step(1.0f / 60);
+    EXPECT_EQ(world.lastProfile().droppedStaticHits, 0u);
+    EXPECT_GT(world.lastProfile().meshTriangles, 10000u) << "one body may hold far more than the average";
+}
