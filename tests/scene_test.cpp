@@ -199,6 +199,11 @@ TEST(SceneLoader, InputBeyondTheEnginesLimitsIsRefusedWithTheLimitAndThePlace) {
     expectAll(msg(R"("materials": {"lead": {"density": 1e38}})"),
               {"at /materials/lead/density: must be in [0.001, 1e+06] kg/m^3 (got 1e+38; docs/limits.md)"});
     expectAll(msg(R"("steps": 1000000000)"), {"at /steps:", "100000000"});
+    // Body positions within the World's coordinate limit, explicit or generated (the fuzzer's second finding).
+    expectAll(msg(R"("bodies": [{"shape": "cube", "position": [-275630, 0, 0]}])"),
+              {"at /bodies/0/position: (-275630, 0, 0), farther than 100000 m from the origin", "docs/limits.md"});
+    expectAll(msg(R"("generators": [{"type": "grid", "shape": "cube", "count": [3, 1, 1], "spacing": [60000, 1, 1]}])"),
+              {"at /generators/0: puts body 2 at (", "farther than 100000 m from the origin"});
     expectAll(errorOf([] { parseScene(R"({"shapes": {"m": {"type": "mesh", "obj": "/dev/zero"}}})", "o.json"); }),
               {"o.json: at /shapes/m/obj: '/dev/zero' is an absolute path: name the OBJ file relative to the scene"});
     expectAll(errorOf([] {

@@ -527,6 +527,21 @@ Quat getRotation(const Json& j, const Loc& at) {
     return Quat::fromAxisAngle(axis, static_cast<float>(angle));
 }
 
+bool withinCoordinateLimit(Vec3 p) {
+    return std::abs(p.x) <= limits::kMaxCoordinate && std::abs(p.y) <= limits::kMaxCoordinate &&
+           std::abs(p.z) <= limits::kMaxCoordinate;
+}
+
+std::string describePoint(Vec3 p) {
+    return "(" + formatNumber(p.x) + ", " + formatNumber(p.y) + ", " + formatNumber(p.z) + ")";
+}
+
+/// The end of a message about a body position past limits::kMaxCoordinate, the World's limit.
+std::string farFromOrigin() {
+    return ", farther than " + formatNumber(limits::kMaxCoordinate) +
+           " m from the origin on an axis, where float spacing exceeds the contact slop (docs/limits.md)";
+}
+
 // ---------------------------------------------------------------------------------------------------------------
 // The scene being built
 
@@ -984,7 +999,11 @@ void Builder::parseBodies(const Json& j, const Loc& at) {
         require(o, b, "shape");
         SceneBody body;
         body.shape = shapeRef(o["shape"], b / "shape");
-        if (o.contains("position")) body.def.position = getVec3(o["position"], b / "position");
+        if (o.contains("position")) {
+            body.def.position = getVec3(o["position"], b / "position");
+            if (!withinCoordinateLimit(body.def.position))
+                (b / "position").fail(describePoint(body.def.position) + farFromOrigin());
+        }
         parseBodyFields(o, b, "type", body.def);
         checkShapeForType(body.shape, body.def.type, b / "shape");
         scene.bodies.push_back(body);
@@ -995,6 +1014,7 @@ void Builder::parseGenerators(const Json& j, const Loc& at) {
     const Json& arr = expectArray(j, at, "an array of generators");
     for (std::size_t gi = 0; gi < arr.size(); ++gi) {
         const Loc g = at / gi;
+        const std::size_t firstGenerated = scene.bodies.size();
         const Json& o = expectObject(arr[gi], g, "a generator object");
         require(o, g, "type");
         const std::string& type = getString(o["type"], g / "type");
@@ -1111,6 +1131,11 @@ void Builder::parseGenerators(const Json& j, const Loc& at) {
             reserveBodies(static_cast<double>(p.count), g / "count");
             scene_detail::generateRandom(p, common, scene.bodies);
         }
+        // A spacing or a repeat can carry generated bodies far out, whichever kind the generator is.
+        for (std::size_t k = firstGenerated; k < scene.bodies.size(); ++k)
+            if (!withinCoordinateLimit(scene.bodies[k].def.position))
+                g.fail("puts body " + std::to_string(k) + " at " + describePoint(scene.bodies[k].def.position) +
+                       farFromOrigin());
     }
 }
 
