@@ -27,14 +27,19 @@ D3 sub(D3 a, D3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 double dotD(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 D3 crossD(D3 a, D3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 
-/// Distance along the ray to the triangle's plane where the ray crosses it within `margin` (barycentric) of the
-/// triangle, either side; infinity otherwise.
+/// Distance along the ray (unit `dir`) to the triangle's plane where the ray crosses it within `margin` (barycentric)
+/// of the triangle, either side; infinity otherwise.
 double rayTriangle(D3 origin, D3 dir, D3 a, D3 b, D3 c, double margin) {
     const D3 e1 = sub(b, a), e2 = sub(c, a);
     const D3 p = crossD(dir, e2);
     const double det = dotD(e1, p);
-    if (std::abs(det) < 1e-300) return std::numeric_limits<double>::infinity();
     const D3 s = sub(origin, a);
+    const D3 n = crossD(e1, e2);
+    const double area2 = std::sqrt(dotD(n, n));
+    // A ray in the triangle's plane (to rounding) may touch it anywhere along its length: brute force cannot say
+    // where, so it allows a hit from the origin on.
+    if (std::abs(det) <= 1e-6 * area2 && std::abs(dotD(s, n)) <= 1e-6 * area2 * (1 + std::sqrt(dotD(s, s)))) return 0;
+    if (std::abs(det) < 1e-300) return std::numeric_limits<double>::infinity();
     const double u = dotD(s, p) / det;
     const D3 q = crossD(s, e1);
     const double v = dotD(dir, q) / det;
