@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "broadphase/broadphase.h"
@@ -21,7 +22,9 @@ namespace rubble::detail {
 float treeScale(const StaticBvh::Tree& tree);
 
 /// Pad for boxes around coordinates up to `scale`: about eight float ulps.
-inline float boxPad(float scale) { return 1e-6f * scale + 1e-30f; }
+/// Finite whatever the scale: an infinite pad would turn an unused lane's empty box (+inf..-inf) into NaN and let the
+/// walk enter it (a query from 1e38 m did).
+inline float boxPad(float scale) { return std::min(1e-6f * scale + 1e-30f, std::numeric_limits<float>::max()); }
 
 /// A box of half extents `extent` swept from `origin` along the unit direction `dir`, with `pad` added to every box
 /// it is tested against.

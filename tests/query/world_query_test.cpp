@@ -179,6 +179,20 @@ TEST(QueryWorld, TenKilometresFromTheOriginKeepsMillimetres) {
     EXPECT_NEAR(cast->distance, 3.5f, 1e-4f);
 }
 
+// Queries from the far end of the float range find nothing and read nothing they should not: the world fuzzer's
+// sphere cast from y = -1.7e38 m padded the tree's boxes by infinity, which walked into unused lanes (a wild read).
+TEST(QueryWorld, QueriesFromTheEdgeOfTheFloatRangeFindNothing) {
+    EveryKind s({0, 0, 0});
+    const float far = 1.7e38f;
+    for (const Vec3 origin : {Vec3{-29.9f, -far, 30}, Vec3{far, far, far}, Vec3{-far, 0, 0}}) {
+        EXPECT_FALSE(s.world.castRay(origin, {1, 1, 1}, 50));
+        EXPECT_FALSE(s.world.castSphere(origin, 0.2f, {1, 1, 1}, 50));
+        std::vector<BodyId> found;
+        EXPECT_EQ(s.world.overlapSphere(origin, 1, found), 0u);
+        EXPECT_EQ(s.world.overlapAabb(origin - Vec3{1, 1, 1}, origin + Vec3{1, 1, 1}, found), 0u);
+    }
+}
+
 TEST(QueryWorld, GrazingRaysFollowClosedSets) {
     World w;
     const BodyId ball = addBody(w, w.createShape(SphereDef{1}), {});
