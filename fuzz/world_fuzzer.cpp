@@ -12,6 +12,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <optional>
 #include <string>
@@ -57,6 +59,9 @@ public:
         check(outcomes[0].refused == outcomes[1].refused && outcomes[0].message == outcomes[1].message,
               std::string(what) + ": 1 and 2 threads disagree: '" + outcomes[0].message + "' vs '" +
                   outcomes[1].message + "'");
+        if (trace_)
+            std::fprintf(stderr, "%s%s%s\n", what, outcomes[0].refused ? ": refused: " : "",
+                         outcomes[0].message.c_str());
         if (outcomes[0].refused)
             check(!outcomes[0].message.empty(), std::string(what) + ": a refusal without words");
         else
@@ -85,6 +90,8 @@ public:
 
 private:
     World worlds_[2];
+    /// RUBBLE_FUZZ_TRACE=1 prints every call and its refusal, to read what a failing program did.
+    bool trace_ = std::getenv("RUBBLE_FUZZ_TRACE") != nullptr;
 };
 
 Vec3 vec(FuzzInput& in, float range) {
