@@ -3,6 +3,8 @@
 # in build-fuzz/ and runs them, two at a time (each fuzzer is one process on one core).
 #   scripts/fuzz.sh [SECONDS] [TARGET...]    each target for SECONDS (default 600); targets: scene_loader obj_loader
 #                                            hull_builder world (default: all four)
+# FUZZ_SEED=N fixes libFuzzer's seed (CI's runs, so that what CI finds is found again by the same command); without
+# it every run draws its own.
 # Inputs that reach new code are kept in build-fuzz/corpus/TARGET (seeded from tests/data/fuzz/TARGET and the test
 # scenes and OBJ files), so a later run goes on from there. An input that breaks a target is written to
 # build-fuzz/findings/ and the script fails, printing the end of that target's log; once fixed, add the input to
@@ -36,7 +38,7 @@ run() {
   # shellcheck disable=SC2086  # the seed directories are words
   build-fuzz/fuzz/rubble_fuzz_"$t" "$corpus" tests/data/fuzz/"$t" ${seeds[$t]:-} \
     ${dicts[$t]:+-dict=${dicts[$t]}} -max_len="${lengths[$t]}" -max_total_time="$seconds" -timeout=30 \
-    -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix=build-fuzz/findings/"$t"- \
+    -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix=build-fuzz/findings/"$t"- ${FUZZ_SEED:+-seed=$FUZZ_SEED} \
     >build-fuzz/logs/"$t".log 2>&1
 }
 failed=()
