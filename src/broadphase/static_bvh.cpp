@@ -795,7 +795,7 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
         bool rewrite = !keptValid;
         // The budget bounds the kept lists, and with them every output: static bodies piled onto one point would
         // otherwise hand each moving body near them the whole pile.
-        const std::size_t cap = std::max((end - begin) * budgetPerBody_, budgetMinPerChunk_);
+        const std::size_t cap = std::max((end - begin) * limits::kStaticHitsPerBody, limits::kMinChunkStaticHits);
         for (auto i = std::uint32_t(begin); i < end && !rewrite; ++i)
             rewrite = !mf.asleep(i) && !contains(out.grown[i - begin], boxOf(i));
         if (rewrite) out.keptDropped = 0;

@@ -153,11 +153,6 @@ public:
 
     /// Static candidates the last query dropped past the budget (limits::kStaticHitsPerBody); 0 in any sane scene.
     std::uint64_t droppedHits() const { return droppedHits_; }
-    /// The budget per chunk of moving bodies: at most perBody times the chunk's bodies, at least minPerChunk.
-    void setBudget(std::size_t perBody, std::size_t minPerChunk) {
-        budgetPerBody_ = perBody;
-        budgetMinPerChunk_ = minPerChunk;
-    }
 
     /// Live primitives (tombstones left out, inserts not yet in a part counted).
     std::uint32_t primitiveCount() const;
@@ -225,8 +220,6 @@ private:
     std::uint64_t generation_ = 1;  ///< changes with every edit: kept query hits of another generation are stale
     std::vector<ChunkOutput> chunks_;
     std::vector<WorkerScratch> workers_;
-    std::size_t budgetPerBody_ = limits::kStaticHitsPerBody;
-    std::size_t budgetMinPerChunk_ = limits::kMinChunkStaticHits;
     std::uint64_t droppedHits_ = 0;
 };
 
