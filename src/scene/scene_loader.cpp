@@ -33,6 +33,7 @@
 #include "rubble/limits.h"
 #include "rubble/scene.h"
 #include "scene/generators.h"
+#include "world/validation.h"
 
 namespace rubble {
 namespace {
@@ -527,15 +528,6 @@ Quat getRotation(const Json& j, const Loc& at) {
     return Quat::fromAxisAngle(axis, static_cast<float>(angle));
 }
 
-bool withinCoordinateLimit(Vec3 p) {
-    return std::abs(p.x) <= limits::kMaxCoordinate && std::abs(p.y) <= limits::kMaxCoordinate &&
-           std::abs(p.z) <= limits::kMaxCoordinate;
-}
-
-std::string describePoint(Vec3 p) {
-    return "(" + formatNumber(p.x) + ", " + formatNumber(p.y) + ", " + formatNumber(p.z) + ")";
-}
-
 /// The end of a message about a body position past limits::kMaxCoordinate, the World's limit.
 std::string farFromOrigin() {
     return ", farther than " + formatNumber(limits::kMaxCoordinate) +
@@ -1001,8 +993,8 @@ void Builder::parseBodies(const Json& j, const Loc& at) {
         body.shape = shapeRef(o["shape"], b / "shape");
         if (o.contains("position")) {
             body.def.position = getVec3(o["position"], b / "position");
-            if (!withinCoordinateLimit(body.def.position))
-                (b / "position").fail(describePoint(body.def.position) + farFromOrigin());
+            if (!detail::withinCoordinateLimit(body.def.position))
+                (b / "position").fail(detail::describe(body.def.position) + farFromOrigin());
         }
         parseBodyFields(o, b, "type", body.def);
         checkShapeForType(body.shape, body.def.type, b / "shape");
@@ -1133,8 +1125,8 @@ void Builder::parseGenerators(const Json& j, const Loc& at) {
         }
         // A spacing or a repeat can carry generated bodies far out, whichever kind the generator is.
         for (std::size_t k = firstGenerated; k < scene.bodies.size(); ++k)
-            if (!withinCoordinateLimit(scene.bodies[k].def.position))
-                g.fail("puts body " + std::to_string(k) + " at " + describePoint(scene.bodies[k].def.position) +
+            if (!detail::withinCoordinateLimit(scene.bodies[k].def.position))
+                g.fail("puts body " + std::to_string(k) + " at " + detail::describe(scene.bodies[k].def.position) +
                        farFromOrigin());
     }
 }

@@ -187,8 +187,7 @@ struct Builder {
         for (std::size_t i = 0; i < def.vertices.size(); ++i) {
             const Vec3 v = def.vertices[i];
             if (!isFinite(v)) continue;  // buildTriangleMesh names it
-            if (std::abs(v.x) > limits::kMaxCoordinate || std::abs(v.y) > limits::kMaxCoordinate ||
-                std::abs(v.z) > limits::kMaxCoordinate)
+            if (!withinCoordinateLimit(v))
                 fail("TriangleMeshDef", "vertices[" + std::to_string(i) + "] " + describe(v) + " lies farther than " +
                                             formatNumber(limits::kMaxCoordinate) +
                                             " m from the origin on an axis (docs/limits.md)");

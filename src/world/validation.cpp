@@ -57,10 +57,15 @@ void requireWithin(const char* where, const char* name, float f, float lo, float
                         " (got " + formatNumber(f) + "; docs/limits.md)");
 }
 
+bool withinCoordinateLimit(Vec3 v) {
+    const float m = limits::kMaxCoordinate;
+    return std::abs(v.x) <= m && std::abs(v.y) <= m && std::abs(v.z) <= m;
+}
+
 void requireInWorld(const char* where, const char* name, Vec3 v) {
     requireFinite(where, name, v);
     const float m = limits::kMaxCoordinate;
-    if (std::abs(v.x) > m || std::abs(v.y) > m || std::abs(v.z) > m)
+    if (!withinCoordinateLimit(v))
         fail(where, std::string(name) + " " + describe(v) + " lies farther than " + formatNumber(m) +
                         " m from the origin on an axis (float spacing there is " +
                         formatNumber(std::nextafter(m, 2 * m) - m) + " m; docs/limits.md)");

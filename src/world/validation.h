@@ -21,6 +21,9 @@ void requireFinite(const char* where, const char* name, float f);
 void requireNonNegative(const char* where, const char* name, float f);
 /// `f` in [lo, hi] (a limit of include/rubble/limits.h; the message names it and docs/limits.md), `unit` after it.
 void requireWithin(const char* where, const char* name, float f, float lo, float hi, const char* unit);
+/// Every coordinate within limits::kMaxCoordinate of the origin (false for NaN): body positions, mesh vertices, and
+/// the scene loader's bodies, so that all refuse at one number.
+bool withinCoordinateLimit(Vec3 v);
 /// Every coordinate within limits::kMaxCoordinate of the origin.
 void requireInWorld(const char* where, const char* name, Vec3 v);
 /// Unit quaternions are required; small drift (from user arithmetic) is normalised away, anything else refused.
