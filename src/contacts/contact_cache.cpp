@@ -220,12 +220,4 @@ void ContactCache::rebuildTable(TaskPool& pool) {
     tableValid_ = true;
 }
 
-void ContactCache::partnersOf(std::uint32_t slot, std::vector<std::uint32_t>& out) const {
-    for (const Entry& e : previous_) {
-        const auto a = static_cast<std::uint32_t>(e.key.slots >> 32), b = static_cast<std::uint32_t>(e.key.slots);
-        if (a == slot) out.push_back(b);
-        if (b == slot) out.push_back(a);
-    }
-}
-
 }  // namespace rubble::detail

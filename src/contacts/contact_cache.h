@@ -64,8 +64,12 @@ public:
     /// Adds kept manifolds to last step's, so that next step's manifolds of the same pairs warm-start from them.
     /// For an island woken between steps, whose pairs the next step finds again.
     void restoreForWarmStart(std::span<const KeptManifold> kept);
-    /// Appends the slots of the bodies that touched `slot` in the last step.
-    void partnersOf(std::uint32_t slot, std::vector<std::uint32_t>& out) const;
+    /// Calls fn(slot of A, slot of B) for every manifold of the last step.
+    template <class Fn>
+    void forEachPair(Fn&& fn) const {
+        for (const Entry& e : previous_)
+            fn(static_cast<std::uint32_t>(e.key.slots >> 32), static_cast<std::uint32_t>(e.key.slots));
+    }
 
     /// Per manifold of the contacts last passed to warmStart: 1 where at least one point carried last step's impulses.
     std::span<const std::uint8_t> carried() const { return carried_; }

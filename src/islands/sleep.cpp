@@ -51,6 +51,7 @@ void SleepingIslands::linkSleepingIslands(const BodyStorage& storage, std::vecto
 bool SleepingIslands::wakeTouched(const Islands& islands, BodyStorage& storage, IntegrationScratch& integration,
                                   Contacts& contacts, std::vector<PointImpulse>& impulses, ContactCache& cache,
                                   TaskPool& pool) {
+    sleepingPartnersIndexed_ = false;
     MovingBodies& m = storage.moving;
     const std::uint32_t count = islands.count();
     touchedByKinematic_.assign(count, 0);
@@ -99,6 +100,7 @@ void SleepingIslands::fallAsleep(const Islands& islands, const Contacts& contact
                                  const std::vector<PointImpulse>& impulses, const ContactCache& cache,
                                  BodyStorage& storage, const ShapeBoundsTable& shapes, const SleepSettings& settings,
                                  float dt, TaskPool& pool) {
+    sleepingPartnersIndexed_ = false;
     MovingBodies& m = storage.moving;
     const std::uint32_t count = islands.count();
     if (touchedByKinematic_.size() != count) touchedByKinematic_.assign(count, 0);
@@ -198,20 +200,34 @@ void SleepingIslands::wake(std::uint32_t dense, BodyStorage& storage) {
         wakeGroup(storage.moving.sleepGroup[dense], storage, pendingWarmStarts_);
 }
 
+void SleepingIslands::indexSleepingPartners(const BodyStorage& storage, const ContactCache& cache) {
+    const auto& slots = storage.slots();
+    const auto asleep = [&](std::uint32_t slot) {
+        return storage.alive(slot) && slots[slot].set == BodySet::Moving &&
+               (storage.moving.flags[slots[slot].dense] & kFlagAsleep) != 0;
+    };
+    sleepingPartners_.clear();
+    const auto add = [&](std::uint32_t a, std::uint32_t b) {
+        if (asleep(b)) sleepingPartners_.emplace_back(a, b);
+        if (asleep(a)) sleepingPartners_.emplace_back(b, a);
+    };
+    cache.forEachPair(add);
+    for (std::uint32_t g = 0; g < groups_.size(); ++g)
+        if (groupIds_.alive(g))
+            for (const KeptManifold& k : groups_[g].manifolds) add(k.pair.a, k.pair.b);
+    std::sort(sleepingPartners_.begin(), sleepingPartners_.end());
+    sleepingPartnersIndexed_ = true;
+}
+
 void SleepingIslands::wakeTouching(std::uint32_t slot, BodyStorage& storage, const ContactCache& cache) {
     if (sleepingBodies_ == 0) return;
-    std::vector<std::uint32_t> partners;
-    cache.partnersOf(slot, partners);
-    for (std::uint32_t g = 0; g < groups_.size(); ++g) {
-        if (!groupIds_.alive(g)) continue;
-        const Group& group = groups_[g];
-        const bool touches = std::any_of(group.manifolds.begin(), group.manifolds.end(),
-                                         [&](const KeptManifold& k) { return k.pair.a == slot || k.pair.b == slot; });
-        if (touches) wakeGroup(g, storage, pendingWarmStarts_);
-    }
+    if (!sleepingPartnersIndexed_) indexSleepingPartners(storage, cache);
+    // A sleeping island that touches the body holds a sleeping partner of it, and waking that partner wakes it.
     const auto& slots = storage.slots();
-    for (std::uint32_t p : partners)
-        if (storage.alive(p) && slots[p].set == BodySet::Moving) wake(slots[p].dense, storage);
+    auto it = std::lower_bound(sleepingPartners_.begin(), sleepingPartners_.end(), std::pair{slot, 0u});
+    for (; it != sleepingPartners_.end() && it->first == slot; ++it)
+        if (storage.alive(it->second) && slots[it->second].set == BodySet::Moving)
+            wake(slots[it->second].dense, storage);
 }
 
 void SleepingIslands::wakeAll(BodyStorage& storage) {
@@ -219,6 +235,7 @@ void SleepingIslands::wakeAll(BodyStorage& storage) {
 }
 
 void SleepingIslands::flushWarmStarts(ContactCache& cache) {
+    sleepingPartnersIndexed_ = false;
     if (pendingWarmStarts_.empty()) return;
     cache.restoreForWarmStart(pendingWarmStarts_);
     pendingWarmStarts_.clear();

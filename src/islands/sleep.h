@@ -14,6 +14,7 @@
 // island (forces, impulses, velocities, transforms, removal of a body it rests on); its kept manifolds then go to
 // the contact cache, so that the next step's manifolds warm-start from them.
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "bounds/bounds.h"
@@ -61,6 +62,8 @@ private:
     using GroupId = Handle<Group>;
     /// Wakes group g and appends its kept manifolds to `out`.
     void wakeGroup(std::uint32_t g, BodyStorage& storage, std::vector<KeptManifold>& out);
+    /// Fills sleepingPartners_ from the kept manifolds and last step's contacts.
+    void indexSleepingPartners(const BodyStorage& storage, const ContactCache& cache);
 
     SlotMap<GroupId> groupIds_;
     std::vector<Group> groups_;  ///< by group slot
@@ -69,6 +72,12 @@ private:
     std::vector<std::vector<std::uint32_t>> chunkIslands_;
     std::vector<std::vector<std::uint32_t>> chunkLone_;  ///< per chunk of bodies: those that fall asleep alone
     std::vector<KeptManifold> restored_;
+    /// Between steps, (slot, slot of a sleeping body it touches) sorted by the first: a game that removes a thousand
+    /// bodies a step looks each one's sleeping partners up here instead of scanning every contact a thousand times.
+    /// Built by the first wakeTouching after a step; bodies only fall asleep in a step, so until the next one it
+    /// lists every sleeping partner (and some that have woken since, which waking again leaves as they are).
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> sleepingPartners_;
+    bool sleepingPartnersIndexed_ = false;
     std::uint32_t sleepingBodies_ = 0;
 };
 
