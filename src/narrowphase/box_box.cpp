@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "narrowphase/clip.h"
+#include "narrowphase/closest_points_contact.h"
 #include "simd/simd.h"
 #include "simd/vec.h"
 
@@ -576,12 +577,16 @@ bool finishEdge(const BoxSat<float>& sat, Vec3 posA, Vec3 halfA, Vec3 halfB, flo
             w = minf(maxf(w, -hb[j]), hb[j]);
             s = minf(maxf(bb * w - c, -ha[i]), ha[i]);
         }
-        float cb[3], depth = 0;
+        float cb[3], depth = 0, apart2 = 0;
         for (int q = 0; q < 3; ++q) {
             cb[q] = pb[q] + w * r[q][j];
             const float ca = pa[q] + (q == i ? s : 0.0f);
             depth += (ca - cb[q]) * n[q];
+            apart2 += (ca - cb[q]) * (ca - cb[q]);
         }
+        // Apart, the depth is minus the distance of the closest points found: where an edge's end is closest it
+        // exceeds the separation along the axis, and keepDistanceExact sees that the axis misstates the distance.
+        if (depth < 0) depth = -std::sqrt(apart2);
         if (depth < -margin) return false;
         out.normal = mul(ra, n);
         out.points[0].position = posA + mul(ra, cb);
@@ -598,32 +603,67 @@ bool finishEdge(const BoxSat<float>& sat, Vec3 posA, Vec3 halfA, Vec3 halfB, flo
 Vec3W<float> wide1(Vec3 v) { return {v.x, v.y, v.z}; }
 QuatW<float> wide1(Quat q) { return {q.x, q.y, q.z, q.w}; }
 
+/// The corner of a box nearest a point in its frame: bit 0 for +x, 1 for +y, 2 for +z.
+std::uint32_t cornerNear(Vec3 local) {
+    return (local.x > 0 ? 1u : 0u) | (local.y > 0 ? 2u : 0u) | (local.z > 0 ? 4u : 0u);
+}
+
+/// Boxes apart whose clipped contact misstates their distance (closest_points_contact.h) get the contact at their
+/// closest points instead.
+void keepDistanceExact(float bestSeparation, const Transform& a, Vec3 halfA, const Transform& b, Vec3 halfB,
+                       float margin, Manifold& out) {
+    const float size = maxf(maxf(maxf(halfA.x, halfA.y), maxf(halfA.z, halfB.x)), maxf(halfB.y, halfB.z));
+    if (!misstatesDistance(out, bestSeparation, size)) return;
+    GjkShape ga, gb;
+    ga.core = gb.core = GjkShape::Core::Box;
+    ga.halfExtents = halfA, gb.halfExtents = halfB;
+    ga.pose = a, gb.pose = b;
+    Vec3 localA, localB;
+    if (!contactAtClosestPoints(ga, gb, margin, out, localA, localB)) return;
+    out.points[0].feature =
+        (kClosestPointsFeatureKind << kBoxFeatureKindShift) | (cornerNear(localA) << 8) | cornerNear(localB);
+}
+
 /// The contact of one pair (lane 0 of a float SAT): its edge-edge point or its clipped reference face.
-bool finishOne(const BoxSat<float>& sat, Vec3 posA, Vec3 halfA, Vec3 posB, Vec3 halfB, float margin, Manifold& out) {
+bool finishOne(const BoxSat<float>& sat, const Transform& a, Vec3 halfA, const Transform& b, Vec3 halfB, float margin,
+               Manifold& out) {
     if (sat.separated) {
         out.pointCount = 0;
         return false;
     }
-    if (sat.useEdge) return finishEdge(sat, posA, halfA, halfB, margin, out);
-    FaceSlots<float> face;
-    faceSlots<float>(sat, wide1(halfA), wide1(halfB), margin, face);
-    FaceLanes<1> stored;
-    storeFace(face, stored);
-    FacePoints<float> points;
-    facePoints<float>(stored, sat, wide1(posA), wide1(posB), points);
-    FacePointLanes<1> storedPoints;
-    storePoints(points, storedPoints);
-    return emitFace(stored, storedPoints, 0, sat.useB, out);
+    const Vec3 posA = a.position, posB = b.position;
+    if (sat.useEdge) {
+        finishEdge(sat, posA, halfA, halfB, margin, out);
+    } else {
+        FaceSlots<float> face;
+        faceSlots<float>(sat, wide1(halfA), wide1(halfB), margin, face);
+        FaceLanes<1> stored;
+        storeFace(face, stored);
+        FacePoints<float> points;
+        facePoints<float>(stored, sat, wide1(posA), wide1(posB), points);
+        FacePointLanes<1> storedPoints;
+        storePoints(points, storedPoints);
+        emitFace(stored, storedPoints, 0, sat.useB, out);
+    }
+    keepDistanceExact(maxf(sat.sepA, maxf(sat.sepB, sat.sepE)), a, halfA, b, halfB, margin, out);
+    return out.pointCount > 0;
+}
+
+Transform poseA(const BoxPairs& in, std::size_t i) {
+    return {{in.ax[i], in.ay[i], in.az[i]}, {in.aqx[i], in.aqy[i], in.aqz[i], in.aqw[i]}};
+}
+Transform poseB(const BoxPairs& in, std::size_t i) {
+    return {{in.bx[i], in.by[i], in.bz[i]}, {in.bqx[i], in.bqy[i], in.bqz[i], in.bqw[i]}};
 }
 
 /// Pair i of a batch, one lane.
 bool collideAt(const BoxPairs& in, std::size_t i, Manifold& out) {
-    const Vec3 pa{in.ax[i], in.ay[i], in.az[i]}, pb{in.bx[i], in.by[i], in.bz[i]};
+    const Transform a = poseA(in, i), b = poseB(in, i);
     const Vec3 ha{in.ahx[i], in.ahy[i], in.ahz[i]}, hb{in.bhx[i], in.bhy[i], in.bhz[i]};
     BoxSat<float> sat;
-    boxSat<float>(wide1(pa), {in.aqx[i], in.aqy[i], in.aqz[i], in.aqw[i]}, wide1(ha), wide1(pb),
-                  {in.bqx[i], in.bqy[i], in.bqz[i], in.bqw[i]}, wide1(hb), in.margin[i], sat);
-    return finishOne(sat, pa, ha, pb, hb, in.margin[i], out);
+    boxSat<float>(wide1(a.position), wide1(a.rotation), wide1(ha), wide1(b.position), wide1(b.rotation), wide1(hb),
+                  in.margin[i], sat);
+    return finishOne(sat, a, ha, b, hb, in.margin[i], out);
 }
 
 /// Pairs [i, i + kLanes): the axis tests and the face clipping in SIMD lanes, then each pair's manifold (an
@@ -643,6 +683,8 @@ void collideWideAt(const BoxPairs& in, std::size_t i, std::size_t lanes, Manifol
     constexpr int kValues = 3 * 9 + 3 + 8;
     alignas(64) float values[kValues][simd::kLanes];
     bool separated[simd::kLanes], useB[simd::kLanes], useEdge[simd::kLanes];
+    alignas(64) float bestSeparation[simd::kLanes];
+    simd::store(bestSeparation, simd::max(sat.sepA, simd::max(sat.sepB, sat.sepE)));
     int f = 0;
     if (simd::any(simd::andMask(sat.useEdge, simd::notMask(sat.separated))))  // only edge-edge pairs read them back
         forEachValue(sat, [&](FloatW& v) { simd::store(values[f++], v); });
@@ -667,18 +709,19 @@ void collideWideAt(const BoxPairs& in, std::size_t i, std::size_t lanes, Manifol
             m.pointCount = 0;
             continue;
         }
+        const Vec3 ha{in.ahx[p], in.ahy[p], in.ahz[p]}, hb{in.bhx[p], in.bhy[p], in.bhz[p]};
         if (!useEdge[k]) {
             emitFace(face, points, k, useB[k], m);
-            continue;
+        } else {
+            BoxSat<float> one;
+            f = 0;
+            forEachValue(one, [&](float& v) { v = values[f++][k]; });
+            one.separated = false;
+            one.useB = useB[k];
+            one.useEdge = true;
+            finishEdge(one, {in.ax[p], in.ay[p], in.az[p]}, ha, hb, in.margin[p], m);
         }
-        BoxSat<float> one;
-        f = 0;
-        forEachValue(one, [&](float& v) { v = values[f++][k]; });
-        one.separated = false;
-        one.useB = useB[k];
-        one.useEdge = true;
-        finishEdge(one, {in.ax[p], in.ay[p], in.az[p]}, {in.ahx[p], in.ahy[p], in.ahz[p]},
-                   {in.bhx[p], in.bhy[p], in.bhz[p]}, in.margin[p], m);
+        keepDistanceExact(bestSeparation[k], poseA(in, p), ha, poseB(in, p), hb, in.margin[p], m);
     }
 }
 
@@ -688,7 +731,7 @@ bool collideBoxes(const Transform& a, Vec3 halfA, const Transform& b, Vec3 halfB
     BoxSat<float> sat;
     boxSat<float>(wide1(a.position), wide1(a.rotation), wide1(halfA), wide1(b.position), wide1(b.rotation),
                   wide1(halfB), margin, sat);
-    return finishOne(sat, a.position, halfA, b.position, halfB, margin, out);
+    return finishOne(sat, a, halfA, b, halfB, margin, out);
 }
 
 void collideBoxesBatch(const BoxPairs& in, std::size_t n, Manifold* out, const std::uint32_t* outIndex, bool padded) {

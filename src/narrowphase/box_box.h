@@ -24,7 +24,9 @@
 //   its reference face, and with it its feature ids, step after step.
 //
 // Feature ids (ContactPoint::feature), 32 bits:
-//   bits 30-31  kind: 0 = face contact with reference face on A, 1 = reference face on B, 2 = edge-edge contact
+//   bits 30-31  kind: 0 = face contact with reference face on A, 1 = reference face on B, 2 = edge-edge contact,
+//               3 = boxes apart whose clipped contact misstated their distance: one point at their closest points
+//               (closest_points_contact.h), bits 8-15 A's corner nearest it, bits 0-7 B's (bit 0 +x, 1 +y, 2 +z)
 //   face contacts (kind 0 or 1):
 //     bits 16-18  reference face, bits 8-10 incident face; a face is 2 * axis + (1 if its normal is -axis)
 //     bits 0-7    the point on the incident face:

@@ -16,6 +16,7 @@
 
 #include "narrowphase/box_box.h"
 #include "narrowphase/clip.h"
+#include "narrowphase/closest_points_contact.h"
 #include "narrowphase/gjk.h"
 #include "shapes/shape.h"
 #include "simd/simd.h"
@@ -275,6 +276,18 @@ int facesInCone(const std::vector<float>* normalRows, int faceCount, Vec3 u, flo
     return count;
 }
 
+/// The vertex of H nearest p (in H's frame).
+std::uint32_t nearestVertex(const HullView& H, Vec3 p) {
+    int best = 0;
+    float bestD = INFINITY;
+    for (int i = 0; i < H.vertexCount; ++i) {
+        const Vec3 d = H.vertices[i] - p;
+        const float d2 = dot(d, d);
+        if (d2 < bestD) bestD = d2, best = i;
+    }
+    return static_cast<std::uint32_t>(best);
+}
+
 /// Hull-hull kernel. B is brought into A's frame (relative to A's centre); all tests run there.
 //
 // Every hull holds a ball of its inradius around its interior point, so along a unit axis n the hulls are apart by
@@ -414,9 +427,10 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         if (m == 0) {
             // Nothing of the incident face lies over the reference face (deep, lopsided overlaps where hysteresis kept
             // a face axis): report the deepest incident vertex alone, so the pair is never dropped while the SAT says
-            // it overlaps.
+            // it overlaps. Apart, the vertex is not over the face and its height misstates the distance: the
+            // closest points decide (keepDistanceExact).
             const float d = refOff - lowest;
-            if (d < -margin) return false;
+            if (d < -minf(margin, kClosestPointsMinimumGap * maxf(A.size, B.size))) return false;
             pts[0] = iv[deepest], depth[0] = d, m = 1;
             ids[0] = 0x7FFF;
             for (std::uint32_t k = I.faceStart[fi]; k < I.faceStart[fi + 1]; ++k)
@@ -439,6 +453,20 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         }
         out.pointCount = count;
         return count > 0;
+    };
+    // Hulls apart whose clipped or edge contact misstates their distance (closest_points_contact.h) get the contact
+    // at their closest points instead; `bestSeparation` is the largest separation of the axes tested.
+    const auto keepDistanceExact = [&](float bestSeparation) {
+        if (!misstatesDistance(out, bestSeparation, maxf(A.size, B.size))) return out.pointCount > 0;
+        GjkShape ga, gb;
+        ga.core = gb.core = GjkShape::Core::Points;
+        ga.points = A.vertices, ga.pointCount = static_cast<std::uint32_t>(A.vertexCount), ga.pose = poseA;
+        gb.points = B.vertices, gb.pointCount = static_cast<std::uint32_t>(B.vertexCount), gb.pose = poseB;
+        Vec3 localA, localB;
+        if (!contactAtClosestPoints(ga, gb, margin, out, localA, localB)) return out.pointCount > 0;
+        out.points[0].feature = (kClosestPointsFeatureKind << 30) | ((nearestVertex(A, localA) & 0x7FFFu) << 15) |
+                                (nearestVertex(B, localB) & 0x7FFFu);
+        return true;
     };
     const auto separatedBy = [&](SatHint::Kind kind, int a, int b) {
         if (hint) *hint = {kind, true, 0, static_cast<std::uint16_t>(a), static_cast<std::uint16_t>(b), 0};
@@ -482,7 +510,7 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
             (last.kind == SatHint::kEdges ? edgeContact(last.a, last.b, hintAxis)
                                           : faceContact(last.kind == SatHint::kFaceB, last.a))) {
             hint->reuses = static_cast<std::uint8_t>(last.reuses < 255 ? last.reuses + 1 : 255);
-            return true;
+            return keepDistanceExact(hintSep);
         }
     }
     if (hint) *hint = {};
@@ -626,32 +654,22 @@ bool collidePolytopes(const HullView& A, const Transform& poseA, const HullView&
         }
     }
 
+    const float bestSeparation = maxf(maxf(sepA, sepB), sepE);
     if (edgeA >= 0 && clearlyBetter(sepE, sepFace)) {
-        if (!edgeContact(edgeA, edgeB, axisE)) return false;
+        edgeContact(edgeA, edgeB, axisE);
         if (hint)
             *hint = {
                 SatHint::kEdges, false, 0, static_cast<std::uint16_t>(edgeA), static_cast<std::uint16_t>(edgeB), sepE};
-        return true;
+        return keepDistanceExact(bestSeparation);
     }
     const int fr = useB ? faceB : faceA;
-    if (!faceContact(useB, fr)) return false;
+    faceContact(useB, fr);
     if (hint) *hint = {useB ? SatHint::kFaceB : SatHint::kFaceA, false, 0, static_cast<std::uint16_t>(fr), 0, sepFace};
-    return true;
+    return keepDistanceExact(bestSeparation);
 }
 
 /// Segment feature of parameter t in [0, 1]: 1 at the start, 2 at the end, 0 between.
 std::uint32_t segmentCode(float t) { return t <= 0 ? 1u : (t >= 1 ? 2u : 0u); }
-
-std::uint32_t nearestVertex(const HullView& H, Vec3 p) {
-    int best = 0;
-    float bestD = INFINITY;
-    for (int i = 0; i < H.vertexCount; ++i) {
-        const Vec3 d = H.vertices[i] - p;
-        const float d2 = dot(d, d);
-        if (d2 < bestD) bestD = d2, best = i;
-    }
-    return static_cast<std::uint32_t>(best);
-}
 
 /// Clips segment p0 + t (p1 - p0) to the prism over face f and reports its ends within the margin.
 int capsuleFaceContact(const HullView& H, int f, Vec3 p0, Vec3 p1, float radius, float margin, Vec3 out[2],

@@ -44,7 +44,9 @@
 //
 // Feature ids (ContactPoint::feature), 32 bits:
 //   bits 30-31  kind: 0 = face contact with reference face on A, 1 = reference face on B, 2 = edge-edge (or, for
-//               capsules, the single closest point), 3 unused
+//               capsules, the single closest point), 3 = hulls apart whose clipped or edge contact misstated their
+//               distance: one point at their closest points (closest_points_contact.h), bits 15-29 A's vertex
+//               nearest it, bits 0-14 B's
 //   hull-hull face contacts: bits 22-29 reference face (mod 256), bits 16-21 incident face (mod 64), bits 0-15 the
 //               point on the incident face: the face-local vertex index (bit 15 clear) or clipPointId(label, plane)
 //               from clip.h, where label is the incident edge (starting at that face-local vertex) or
