@@ -159,7 +159,9 @@ struct Pile {
             for (float x = -5.4f; x < 11.5f; x += spacing)
                 for (float z = -3; z < 3; z += spacing) {
                     const float floor = x < 6 ? surface(x, z) : 0.0f;
-                    const Quat q = Quat::fromAxisAngle(randomDirection(rng), tilt(rng));
+                    // One draw per statement: compilers evaluate a call's arguments in different orders.
+                    const Vec3 axis = randomDirection(rng);
+                    const Quat q = Quat::fromAxisAngle(axis, tilt(rng));
                     scene.addMoving(kinds[k++ % 7], {x, floor + 0.39f + spacing * float(layer), z}, q);
                 }
         // Last, a cube (a hull: box-box pairs are always computed) of its own shape sunk into the top of a body of the
@@ -186,10 +188,11 @@ struct Pile {
         std::uniform_real_distribution<float> u(0, 1);
         MovingBodies& m = scene.storage.moving;
         for (std::uint32_t i = 0; i < m.size(); ++i) {
-            const Vec3 d = randomDirection(rng) * (shift * u(rng));
+            const Vec3 shiftDirection = randomDirection(rng);
+            const Vec3 d = shiftDirection * (shift * u(rng));
             m.px[i] += d.x, m.py[i] += d.y, m.pz[i] += d.z;
-            const Quat q =
-                Quat::fromAxisAngle(randomDirection(rng), turn * u(rng)) * Quat{m.qx[i], m.qy[i], m.qz[i], m.qw[i]};
+            const Vec3 turnAxis = randomDirection(rng);
+            const Quat q = Quat::fromAxisAngle(turnAxis, turn * u(rng)) * Quat{m.qx[i], m.qy[i], m.qz[i], m.qw[i]};
             m.qx[i] = q.x, m.qy[i] = q.y, m.qz[i] = q.z, m.qw[i] = q.w;
         }
     }
@@ -284,7 +287,11 @@ TEST(ManifoldReuse, ReusedManifoldsAgreeWithComputedOnesAfterSmallMotions) {
     // Each body shifted by up to 0.2 mm and turned by up to 0.3 mrad (so any pair's shapes moved less than about
     // 1 mm relative to each other): the reusing stage moves its old manifolds; a fresh stage computes them. They must
     // describe the same contacts:
-    // - the same pairs, except those whose deepest point is within 1 mm of the margin (they may come or go);
+    // - the same pairs, except those whose deepest point is within 1 mm of the margin (they may come or go), and
+    //   those the kernels themselves find at only one of the two poses: a body sunk centimetres into the mesh can
+    //   bring a corner over the next triangle with so small a motion, and a reused manifold cannot know of a new
+    //   triangle. Those must be rare (at most 1% of the pairs), and a pair that both fresh answers hold must be
+    //   reused;
     // - normals within 2 mrad (the relative turn, plus a kernel's choice between nearly equal axes);
     // - for points with the same feature id, depths within 0.25 mm. The moved depth follows the motion to first order
     //   at the moved point; a computed point made by clipping slides along its edge instead (the reused one rides
@@ -294,7 +301,7 @@ TEST(ManifoldReuse, ReusedManifoldsAgreeWithComputedOnesAfterSmallMotions) {
     //   slides many times as far as the bodies move.
     Pile pile;
     NarrowPhaseStage reusing;
-    pile.run(reusing, 0.01f);
+    const Contacts before = pile.run(reusing, 0.01f);
     std::mt19937 rng(29);
     pile.jiggle(rng, 2e-4f, 3e-4f);
     const Contacts reused = pile.run(reusing, 0.01f);
@@ -312,14 +319,17 @@ TEST(ManifoldReuse, ReusedManifoldsAgreeWithComputedOnesAfterSmallMotions) {
     const float guard = -Pile::kMargin + 0.001f;
     int compared = 0, points = 0, matched = 0;
     float worstDepth = 0, worstPosition = 0, worstNormal = 0;
-    std::map<PairKey, bool> seen;
+    std::map<PairKey, bool> seen, foundBefore;
+    for (const ContactPair& p : before.pairs) foundBefore[keyOf(p)] = true;
+    int kernelFlips = 0;
     for (std::size_t k = 0; k < reused.pairs.size(); ++k) {
         const PairKey key = keyOf(reused.pairs[k]);
         seen[key] = true;
         const Manifold& r = reused.manifolds[k];
         const auto it = byKey.find(key);
         if (it == byKey.end()) {
-            EXPECT_LT(deepest(r), guard) << "a reused manifold the fresh stage does not find, " << deepest(r);
+            // Reused manifolds are the ones found before the motion: this pair left the kernels' answer.
+            if (deepest(r) >= guard) ++kernelFlips;
             continue;
         }
         const Manifold& c = computed.manifolds[it->second];
@@ -337,17 +347,21 @@ TEST(ManifoldReuse, ReusedManifoldsAgreeWithComputedOnesAfterSmallMotions) {
         }
     }
     for (std::size_t k = 0; k < computed.pairs.size(); ++k) {
-        if (!seen.count(keyOf(computed.pairs[k]))) {
-            EXPECT_LT(deepest(computed.manifolds[k]), guard) << "a computed manifold the reusing stage lost";
-        }
+        const PairKey key = keyOf(computed.pairs[k]);
+        if (seen.count(key) || deepest(computed.manifolds[k]) < guard) continue;
+        EXPECT_FALSE(foundBefore.count(key)) << "a manifold found before and after the motion that reuse lost";
+        ++kernelFlips;
     }
+    EXPECT_LE(kernelFlips, compared / 100) << "pairs the kernels find at only one of two poses 0.2 mm apart";
     EXPECT_GT(compared, 300);
     EXPECT_GT(matched, points * 9 / 10) << "feature ids must mostly survive so small a motion";
     EXPECT_LT(worstNormal, 2e-3f);
     EXPECT_LT(worstDepth, 2.5e-4f);
     EXPECT_LT(worstPosition, 1e-2f);
-    std::printf("compared %d manifolds, %d of %d points by feature: worst depth %.3g m, position %.3g m, normal %.3g\n",
-                compared, matched, points, worstDepth, worstPosition, worstNormal);
+    std::printf(
+        "compared %d manifolds, %d of %d points by feature: worst depth %.3g m, position %.3g m, normal %.3g; %d pairs "
+        "found at one pose only\n",
+        compared, matched, points, worstDepth, worstPosition, worstNormal, kernelFlips);
 }
 
 TEST(ManifoldReuse, ABodyThatTookAnotherOnesSlotIsComputedAgain) {

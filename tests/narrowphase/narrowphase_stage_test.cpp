@@ -34,7 +34,11 @@ TEST(NarrowPhaseStage, ManifoldsExactlyWhereGjkFindsTheShapesWithinTheMargin) {
     std::mt19937 rng(23);
     std::uniform_real_distribution<float> xz(-6, 6), y(-0.2f, 4);
     const std::uint32_t kinds[] = {ball, cube, pill, rock};
-    for (int i = 0; i < 800; ++i) scene.addMoving(kinds[i % 4], {xz(rng), y(rng), xz(rng)}, randomRotation(rng));
+    for (int i = 0; i < 800; ++i) {
+        // Drawn one per statement: the order a function's arguments are evaluated in differs between compilers.
+        const Vec3 origin{xz(rng), y(rng), xz(rng)};
+        scene.addMoving(kinds[i % 4], origin, randomRotation(rng));
+    }
     scene.addStatic(ground, {0, -0.5f, 0}, broad);
 
     const float margin = 0.02f;
@@ -112,9 +116,12 @@ TEST(NarrowPhaseStage, OutputDoesNotDependOnTheThreadCount) {
         std::mt19937 rng(5);
         std::uniform_real_distribution<float> u(-8, 8), speed(-3, 3);
         const std::uint32_t kinds[] = {ball, cube, pill, cube, compound};
-        for (int i = 0; i < 4000; ++i)
-            scene.addMoving(kinds[i % 5], {u(rng), u(rng) * 1.1f, u(rng)}, randomRotation(rng),
-                            {speed(rng), speed(rng), speed(rng)}, {speed(rng), speed(rng), speed(rng)});
+        for (int i = 0; i < 4000; ++i) {
+            const Vec3 origin{u(rng), u(rng) * 1.1f, u(rng)};
+            const Quat rotation = randomRotation(rng);
+            const Vec3 velocity{speed(rng), speed(rng), speed(rng)};
+            scene.addMoving(kinds[i % 5], origin, rotation, velocity, {speed(rng), speed(rng), speed(rng)});
+        }
         CandidatePairs candidates;
         return runStages(scene, broad, threads, 0.02f, candidates);
     };
