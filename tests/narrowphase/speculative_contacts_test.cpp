@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -127,15 +128,21 @@ float deepestOf(const Manifold& m) {
 
 struct Tally {
     int checked = 0, depthOff = 0, normalOff = 0;
+
+    /// Prints the counts for `pair` and requires enough pairs to have been compared.
+    void report(const char* pair) const {
+        std::printf("[ %s ] %d speculative pairs, %d depths and %d normals off the brute force\n", pair, checked,
+                    depthOff, normalOff);
+        EXPECT_GT(checked, 1500);
+    }
 };
 
 /// Places B at a random distance below the margin from A, collides with `collide` and compares with the brute
-/// force over hulls `ha`, `hb` (the shapes' vertices and faces).
+/// force over hulls `ha`, `hb` (the shapes' vertices and faces), counting into `t`.
 template <class MakeGjk, class Collide>
-Tally compareWithBruteForce(std::mt19937& rng, int poses, const ConvexHull& ha, const ConvexHull& hb,
-                            MakeGjk&& gjkShapes, Collide&& collide) {
+void compareWithBruteForce(std::mt19937& rng, int poses, const ConvexHull& ha, const ConvexHull& hb,
+                           MakeGjk&& gjkShapes, Collide&& collide, Tally& t) {
     std::uniform_real_distribution<float> gap(0.0f, kMargin);
-    Tally t;
     for (int n = 0; n < poses; ++n) {
         const Transform pa{{0, 0, 0}, randomRotation(rng)};
         Transform pb{{0, 0, 0}, randomRotation(rng)};
@@ -163,11 +170,10 @@ Tally compareWithBruteForce(std::mt19937& rng, int poses, const ConvexHull& ha, 
         t.normalOff += !normalOk;
         EXPECT_TRUE(depthOk) << "pose " << n << ": deepest " << deepest << ", distance " << truth.distance
                              << ", feature " << std::hex << m.points[0].feature << std::dec;
-        EXPECT_TRUE(normalOk) << "pose " << n << ": normal . the closest points' direction " << alignment << " deepest "
-                              << deepest << " distance " << truth.distance << ", feature " << std::hex
+        EXPECT_TRUE(normalOk) << "pose " << n << ": normal . the closest points' direction " << alignment
+                              << ", deepest " << deepest << ", distance " << truth.distance << ", feature " << std::hex
                               << m.points[0].feature << std::dec;
     }
-    return t;
 }
 
 TEST(SpeculativeContacts, BoxBoxApartWithinTheMarginAgreesWithBruteForce) {
@@ -181,15 +187,14 @@ TEST(SpeculativeContacts, BoxBoxApartWithinTheMarginAgreesWithBruteForce) {
         const auto shapes = [&](const Transform& pa, const Transform& pb) {
             return std::pair{gjkShapeOf(boxA, pa), gjkShapeOf(boxB, pb)};
         };
-        const Tally t = compareWithBruteForce(rng, 60, boxHull(ha), boxHull(hb), shapes,
-                                              [&](const Transform& pa, const Transform& pb, Manifold& m) {
-                                                  return collideBoxes(pa, ha, pb, hb, kMargin, m);
-                                              });
-        all.checked += t.checked, all.depthOff += t.depthOff, all.normalOff += t.normalOff;
+        compareWithBruteForce(
+            rng, 60, boxHull(ha), boxHull(hb), shapes,
+            [&](const Transform& pa, const Transform& pb, Manifold& m) {
+                return collideBoxes(pa, ha, pb, hb, kMargin, m);
+            },
+            all);
     }
-    std::printf("[ box-box ] %d speculative pairs, %d depths and %d normals off the brute force\n", all.checked,
-                all.depthOff, all.normalOff);
-    EXPECT_GT(all.checked, 1500);
+    all.report("box-box");
 }
 
 TEST(SpeculativeContacts, HullPairsApartWithinTheMarginAgreeWithBruteForce) {
@@ -201,15 +206,14 @@ TEST(SpeculativeContacts, HullPairsApartWithinTheMarginAgreeWithBruteForce) {
         const auto shapes = [&](const Transform& pa, const Transform& pb) {
             return std::pair{gjkShapeOf(sa, pa), gjkShapeOf(sb, pb)};
         };
-        const Tally t = compareWithBruteForce(rng, 60, *sa.hull, *sb.hull, shapes,
-                                              [&](const Transform& pa, const Transform& pb, Manifold& m) {
-                                                  return collideHulls(*sa.hull, pa, *sb.hull, pb, kMargin, m);
-                                              });
-        all.checked += t.checked, all.depthOff += t.depthOff, all.normalOff += t.normalOff;
+        compareWithBruteForce(
+            rng, 60, *sa.hull, *sb.hull, shapes,
+            [&](const Transform& pa, const Transform& pb, Manifold& m) {
+                return collideHulls(*sa.hull, pa, *sb.hull, pb, kMargin, m);
+            },
+            all);
     }
-    std::printf("[ hull-hull ] %d speculative pairs, %d depths and %d normals off the brute force\n", all.checked,
-                all.depthOff, all.normalOff);
-    EXPECT_GT(all.checked, 1500);
+    all.report("hull-hull");
 }
 
 TEST(SpeculativeContacts, BoxHullApartWithinTheMarginAgreesWithBruteForce) {
@@ -223,15 +227,14 @@ TEST(SpeculativeContacts, BoxHullApartWithinTheMarginAgreesWithBruteForce) {
         const auto shapes = [&](const Transform& pa, const Transform& pb) {
             return std::pair{gjkShapeOf(box, pa), gjkShapeOf(sb, pb)};
         };
-        const Tally t = compareWithBruteForce(rng, 60, boxHull(ha), *sb.hull, shapes,
-                                              [&](const Transform& pa, const Transform& pb, Manifold& m) {
-                                                  return collideBoxHull(pa, ha, *sb.hull, pb, kMargin, m);
-                                              });
-        all.checked += t.checked, all.depthOff += t.depthOff, all.normalOff += t.normalOff;
+        compareWithBruteForce(
+            rng, 60, boxHull(ha), *sb.hull, shapes,
+            [&](const Transform& pa, const Transform& pb, Manifold& m) {
+                return collideBoxHull(pa, ha, *sb.hull, pb, kMargin, m);
+            },
+            all);
     }
-    std::printf("[ box-hull ] %d speculative pairs, %d depths and %d normals off the brute force\n", all.checked,
-                all.depthOff, all.normalOff);
-    EXPECT_GT(all.checked, 1500);
+    all.report("box-hull");
 }
 
 }  // namespace
