@@ -182,6 +182,26 @@ TEST(Sleeping, RemovingTheBottomBoxWakesTheStackAndItFalls) {
     EXPECT_LT(world.position(stack.back()).y, topBefore - 0.9f);
 }
 
+TEST(Sleeping, RemovingSeveralBodiesBetweenStepsWakesExactlyTheStacksTheyHeld) {
+    // The first removal after a step indexes who touches a sleeping body; the later ones look up the same index
+    // after the first has woken a stack, and a body created in between may take a removed body's slot.
+    World world(sleepySettings());
+    addGround(world);
+    std::vector<std::vector<BodyId>> stacks;
+    for (int k = 0; k < 4; ++k) stacks.push_back(addStack(world, 3, -6.0f + 4.0f * static_cast<float>(k)));
+    for (const auto& stack : stacks) ASSERT_GT(timeToFallAsleep(world, stack.back(), 3.0f), 0);
+    for (const auto& stack : stacks)
+        for (BodyId b : stack) ASSERT_FALSE(world.isAwake(b));
+    world.destroyBody(stacks[0].front());
+    const BodyId newcomer = addBox(world, {0, 10, 20});
+    world.destroyBody(stacks[1].front());
+    world.destroyBody(newcomer);
+    world.destroyBody(stacks[2].front());
+    for (int k = 0; k < 3; ++k)
+        for (std::size_t b = 1; b < stacks[k].size(); ++b) EXPECT_TRUE(world.isAwake(stacks[k][b])) << "stack " << k;
+    for (BodyId b : stacks[3]) EXPECT_FALSE(world.isAwake(b)) << "the untouched stack sleeps on";
+}
+
 TEST(Sleeping, RemovingTheGroundWakesWhatRestsOnIt) {
     World world(sleepySettings());
     const BodyId ground = addGround(world);
