@@ -63,6 +63,7 @@ const BadFile kBadFiles[] = {
     {"bad_missing_obj.json", {"at /shapes/terrain/obj:", "no_such_terrain.obj"}},
     {"bad_compound_child.json", {"at /shapes/thing/children/1/shape/type:", "compound child must be"}},
     {"bad_random_range.json", {"at /generators/0/max:", "axis 1"}},
+    {"bad_static_velocity.json", {"at /bodies/0/angular_velocity: a static body cannot have a velocity"}},
 };
 
 TEST(SceneLoader, MalformedFilesAreRefusedWithFilePlaceAndProblem) {

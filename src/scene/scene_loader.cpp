@@ -936,6 +936,8 @@ void Builder::checkShapeForType(std::uint32_t shape, BodyType type, const Loc& a
                 ", a static-only shape; the body must be static");
 }
 
+constexpr const char* kStaticBodyMoves = "a static body cannot have a velocity (a kinematic body can move)";
+
 BodyType getBodyType(const Json& j, const Loc& at) {
     const std::string& t = getString(j, at);
     if (t == "static") return BodyType::Static;
@@ -969,6 +971,11 @@ void Builder::parseBodyFields(const Json& j, const Loc& at, std::string_view typ
     if (j.contains("user_data")) def.userData = getUint64(j["user_data"], at / "user_data");
     if (j.contains("allow_sleep")) def.allowSleep = getBool(j["allow_sleep"], at / "allow_sleep");
     if (j.contains("bullet")) def.bullet = getBool(j["bullet"], at / "bullet");
+    // World::createBody refuses these too; here the message names the key.
+    if (def.type == BodyType::Static) {
+        if (def.linearVelocity != Vec3{}) (at / "velocity").fail(kStaticBodyMoves);
+        if (def.angularVelocity != Vec3{}) (at / "angular_velocity").fail(kStaticBodyMoves);
+    }
 }
 
 void Builder::reserveBodies(double count, const Loc& at) const {
@@ -1109,6 +1116,10 @@ void Builder::parseGenerators(const Json& j, const Loc& at) {
             if (vmin) {
                 getFloats(o["velocity_min"], g / "velocity_min", p.velocityMin);
                 getFloats(o["velocity_max"], g / "velocity_max", p.velocityMax);
+                for (const float v : {p.velocityMin[0], p.velocityMin[1], p.velocityMin[2], p.velocityMax[0],
+                                      p.velocityMax[1], p.velocityMax[2]})
+                    if (v != 0 && common.prototype.def.type == BodyType::Static)
+                        (g / "velocity_min").fail(kStaticBodyMoves);
             }
             auto checkRange = [&](const float(&lo)[3], const float(&hi)[3], const char* hiKey) {
                 for (std::size_t a = 0; a < 3; ++a) {
