@@ -132,6 +132,11 @@ TEST(ShapeValidation, BadDefinitionsNameDefinitionFieldAndValue) {
               "CompoundDef: children[0]: local.rotation is a zero quaternion: it must be a rotation");
     compound.children = {{SphereDef{1}, {{0, nan, 0}, {}}}};
     EXPECT_EQ(errorOf(compound), "CompoundDef: children[0]: local.position is not finite (0, nan, 0)");
+    // Finite but beyond the coordinate limit: the body's centre of mass would lie beyond it too (a fuzz finding).
+    compound.children = {{SphereDef{1}, {}}, {BoxDef{}, {{0, 0, 3e38f}, {}}}};
+    EXPECT_EQ(errorOf(compound),
+              "CompoundDef: children[1]: local.position (0, 0, 3e+38) lies farther than 100000 m "
+              "from the compound's origin on an axis (docs/limits.md)");
 
     HeightfieldDef field;
     field.rows = 1;

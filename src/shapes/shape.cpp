@@ -160,6 +160,11 @@ struct Builder {
             }
             if (!isFinite(c.local.position))
                 throw Error(where + ": local.position is not finite " + describe(c.local.position));
+            // A child beyond the coordinate limit puts the compound's centre of mass, and so the body, beyond it.
+            if (!withinCoordinateLimit(c.local.position))
+                throw Error(where + ": local.position " + describe(c.local.position) + " lies farther than " +
+                            formatNumber(limits::kMaxCoordinate) + " m from the compound's origin on an axis " +
+                            "(docs/limits.md)");
             const Quat q = c.local.rotation;
             if (!isFinite(q))
                 throw Error(where + ": local.rotation is not finite (" + formatNumber(q.x) + ", " + formatNumber(q.y) +
