@@ -138,10 +138,10 @@ struct Tally {
 };
 
 /// Places B at a random distance below the margin from A, collides with `collide` and compares with the brute
-/// force over hulls `ha`, `hb` (the shapes' vertices and faces), counting into `t`.
-template <class MakeGjk, class Collide>
-void compareWithBruteForce(std::mt19937& rng, int poses, const ConvexHull& ha, const ConvexHull& hb,
-                           MakeGjk&& gjkShapes, Collide&& collide, Tally& t) {
+/// force over hulls `ha`, `hb` (the shapes' vertices and faces), counting into `t`. GJK on the shapes places B.
+template <class Collide>
+void compareWithBruteForce(std::mt19937& rng, int poses, const Shape& shapeA, const Shape& shapeB, const ConvexHull& ha,
+                           const ConvexHull& hb, Collide&& collide, Tally& t) {
     std::uniform_real_distribution<float> gap(0.0f, kMargin);
     for (int n = 0; n < poses; ++n) {
         const Transform pa{{0, 0, 0}, randomRotation(rng)};
@@ -150,8 +150,7 @@ void compareWithBruteForce(std::mt19937& rng, int poses, const ConvexHull& ha, c
         // Move B in along the direction between closest points until it is `target` apart: a few steps converge.
         const float target = gap(rng);
         for (int it = 0; it < 8; ++it) {
-            const auto [ga, gb] = gjkShapes(pa, pb);
-            const GjkResult g = gjkDistance(ga, gb);
+            const GjkResult g = gjkDistance(gjkShapeOf(shapeA, pa), gjkShapeOf(shapeB, pb));
             if (g.status != GjkStatus::Separated || std::fabs(g.distance - target) < 1e-6f) break;
             pb.position = pb.position - g.normal * (g.distance - target);
         }
@@ -184,11 +183,8 @@ TEST(SpeculativeContacts, BoxBoxApartWithinTheMarginAgreesWithBruteForce) {
         const Vec3 ha{half(rng), half(rng), half(rng)};
         const Vec3 hb{half(rng), half(rng), half(rng)};
         const Shape boxA = buildShape(BoxDef{ha}), boxB = buildShape(BoxDef{hb});
-        const auto shapes = [&](const Transform& pa, const Transform& pb) {
-            return std::pair{gjkShapeOf(boxA, pa), gjkShapeOf(boxB, pb)};
-        };
         compareWithBruteForce(
-            rng, 60, boxHull(ha), boxHull(hb), shapes,
+            rng, 60, boxA, boxB, boxHull(ha), boxHull(hb),
             [&](const Transform& pa, const Transform& pb, Manifold& m) {
                 return collideBoxes(pa, ha, pb, hb, kMargin, m);
             },
@@ -203,11 +199,8 @@ TEST(SpeculativeContacts, HullPairsApartWithinTheMarginAgreeWithBruteForce) {
     for (int round = 0; round < 40; ++round) {
         const Shape sa = buildShape(ConvexHullDef{rubble::test::randomHullCloud(rng, 12, 0.5f)});
         const Shape sb = buildShape(ConvexHullDef{rubble::test::randomHullCloud(rng, 12, 0.5f)});
-        const auto shapes = [&](const Transform& pa, const Transform& pb) {
-            return std::pair{gjkShapeOf(sa, pa), gjkShapeOf(sb, pb)};
-        };
         compareWithBruteForce(
-            rng, 60, *sa.hull, *sb.hull, shapes,
+            rng, 60, sa, sb, *sa.hull, *sb.hull,
             [&](const Transform& pa, const Transform& pb, Manifold& m) {
                 return collideHulls(*sa.hull, pa, *sb.hull, pb, kMargin, m);
             },
@@ -224,11 +217,8 @@ TEST(SpeculativeContacts, BoxHullApartWithinTheMarginAgreesWithBruteForce) {
         const Vec3 ha{half(rng), half(rng), half(rng)};
         const Shape box = buildShape(BoxDef{ha});
         const Shape sb = buildShape(ConvexHullDef{rubble::test::randomHullCloud(rng, 12, 0.5f)});
-        const auto shapes = [&](const Transform& pa, const Transform& pb) {
-            return std::pair{gjkShapeOf(box, pa), gjkShapeOf(sb, pb)};
-        };
         compareWithBruteForce(
-            rng, 60, boxHull(ha), *sb.hull, shapes,
+            rng, 60, box, sb, boxHull(ha), *sb.hull,
             [&](const Transform& pa, const Transform& pb, Manifold& m) {
                 return collideBoxHull(pa, ha, *sb.hull, pb, kMargin, m);
             },
