@@ -41,6 +41,14 @@ struct BodyDef {
     /// With Effect::ContinuousCollision: swept against dynamic bodies as well as static geometry (for projectiles;
     /// every fast body is swept against static geometry). Costs a sweep against each body near its path.
     bool bullet = false;
+    /// Report this body's contacts as events (World::contactEvents: begin and end of touch, hits): pairs are reported
+    /// when either body asks. Bodies that do not ask cost the events nothing.
+    bool contactEvents = false;
+    /// A sensor reports the bodies that overlap it (World::sensorEvents) and pushes nothing: its contacts never reach
+    /// the solver, continuous collision passes through it, and queries skip it unless QueryFilter::includeSensors.
+    /// It sees the dynamic and kinematic bodies its collision filter accepts (static ones from a moving sensor too),
+    /// but not other sensors. A dynamic sensor still falls under gravity: make it kinematic to place it.
+    bool sensor = false;
     std::uint64_t userData = 0;
 };
 

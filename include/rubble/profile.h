@@ -17,7 +17,8 @@ enum class Stage : std::uint8_t {
     Islands,
     Solver,
     IntegratePositions,
-    Ccd,  ///< continuous collision, only with Effect::ContinuousCollision
+    Ccd,     ///< continuous collision, only with Effect::ContinuousCollision
+    Events,  ///< contact and sensor events, only while a body asks for them (BodyDef::contactEvents, ::sensor)
     Count,
 };
 inline constexpr int kStageCount = static_cast<int>(Stage::Count);
@@ -76,6 +77,8 @@ struct Profile {
     std::uint32_t sleepingBodies = 0;  ///< bodies asleep after the step
     std::uint32_t ccdBodies = 0;       ///< fast bodies swept by continuous collision (Stage::Ccd)
     std::uint32_t ccdHits = 0;         ///< of those, bodies moved back to their time of impact
+    std::uint32_t sensorPairs = 0;     ///< pairs a sensor takes part in, kept out of the solver (Stage::Events)
+    std::uint32_t events = 0;          ///< contact and sensor events the step reported
 
     const StageTiming& operator[](Stage s) const { return stages[static_cast<int>(s)]; }
     StageTiming& operator[](Stage s) { return stages[static_cast<int>(s)]; }

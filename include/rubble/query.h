@@ -23,7 +23,8 @@ struct QueryFilter {
     bool includeStatic = true;
     bool includeKinematic = true;
     bool includeDynamic = true;
-    BodyId ignore;  ///< a body to skip (the shooter, the character itself); null for none
+    bool includeSensors = false;  ///< sensors (BodyDef::sensor) are not obstacles: queries skip them by default
+    BodyId ignore;                ///< a body to skip (the shooter, the character itself); null for none
     /// Last test, for bodies that passed the others and whose bounding box the query reaches; false skips the body.
     /// Runs on the querying thread, in no particular order, possibly more than once per body.
     std::function<bool(BodyId)> accept;

@@ -151,6 +151,8 @@ struct WorldSettings {
     EffectSet effects = EffectSet::defaults();
     BroadPhaseKind broadPhase = BroadPhaseKind::Auto;
     SleepSettings sleep;
+    /// Contacts that approach faster than this report a hit (ContactHitEvent), m/s, >= 0.
+    float hitEventSpeed = 1.0f;
 };
 
 }  // namespace rubble

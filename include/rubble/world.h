@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "rubble/body.h"
+#include "rubble/events.h"
 #include "rubble/id.h"
 #include "rubble/joint.h"
 #include "rubble/math.h"
@@ -140,6 +141,30 @@ public:
 
     /// Bodies frozen (non-finite, or leaving the coordinate limit: isFrozen) since the last call.
     std::vector<BodyId> takeFrozenBodies();
+
+    // -----------------------------------------------------------------------------------------------------------
+    // Events and contacts (include/rubble/events.h, src/events/, src/world/world_events.cpp)
+
+    /// Contact events of the last step, for the bodies that ask (BodyDef::contactEvents). Valid until the next step.
+    const ContactEvents& contactEvents() const;
+    /// Sensor events of the last step (BodyDef::sensor). Valid until the next step.
+    const SensorEvents& sensorEvents() const;
+    /// Starts or stops reporting a body's contacts. A pair it touches that no body listens to any more ends with an
+    /// end event at the next step, so that every begin has its end.
+    void setContactEvents(BodyId id, bool enabled);
+    bool contactEventsEnabled(BodyId id) const;
+    bool isSensor(BodyId id) const;
+    /// Appends the body's contacts as the last step left them (one per touching or nearly touching part: a compound's
+    /// child, a mesh's triangle), those of its sleeping island included, in the step's order; returns how many. A
+    /// static body's contacts with sleeping bodies are listed too. Bodies created since the last step have none;
+    /// a sensor has none (see sensorEvents).
+    std::size_t contactsOf(BodyId id, std::vector<BodyContact>& contacts) const;
+
+    /// Moves a kinematic body to `position` and `orientation` over the next `dt` seconds (normally the next step's):
+    /// sets the velocities that get it there, so that it pushes and carries dynamic bodies on its way, as a platform
+    /// or a door does. Called every step for a path; the velocities stay until changed, so a body not moved again
+    /// keeps going. Refused for static and dynamic bodies (a dynamic body is moved by forces; setTransform teleports).
+    void moveKinematic(BodyId id, Vec3 position, Quat orientation, float dt);
 
     /// 64-bit hash of the state of every body (pose and velocities, bit for bit), in slot order.
     std::uint64_t stateHash() const;

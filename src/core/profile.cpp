@@ -15,6 +15,7 @@ std::string_view stageName(Stage s) {
         "solver",                //
         "integrate_positions",   //
         "ccd",                   //
+        "events",                //
     };
     // A stage added to the enum without a name here fails the build instead of printing an empty name.
     static_assert(std::size(kNames) == kStageCount, "every stage needs a name");

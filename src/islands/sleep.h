@@ -14,6 +14,7 @@
 // island (forces, impulses, velocities, transforms, removal of a body it rests on); its kept manifolds then go to
 // the contact cache, so that the next step's manifolds warm-start from them.
 #include <cstdint>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -53,6 +54,18 @@ public:
     void flushWarmStarts(ContactCache& cache);
 
     std::uint32_t sleepingBodies() const { return sleepingBodies_; }
+    /// The kept manifolds of moving body `dense`'s sleeping island (bodies named by slot); empty when it is awake.
+    std::span<const KeptManifold> keptManifolds(std::uint32_t dense, const BodyStorage& storage) const {
+        if (!(storage.moving.flags[dense] & kFlagAsleep)) return {};
+        return groups_[storage.moving.sleepGroup[dense]].manifolds;
+    }
+    /// Calls fn(const KeptManifold&) for the kept manifolds of every sleeping island.
+    template <class Fn>
+    void forEachKeptManifold(Fn&& fn) const {
+        for (std::uint32_t g = 0; g < groups_.size(); ++g)
+            if (groupIds_.alive(g))
+                for (const KeptManifold& k : groups_[g].manifolds) fn(k);
+    }
 
 private:
     struct Group {

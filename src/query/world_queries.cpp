@@ -81,6 +81,7 @@ public:
         const detail::BodySlot& s = w_.bodies.slots()[slot];
         const std::uint32_t i = s.dense;
         const BodyId id = w_.bodies.idAt(slot);
+        if (!filter_.includeSensors && (b.flags[i] & detail::kFlagSensor)) return nullptr;
         if (!accepts(b.filterCategory[i], b.filterMask[i], id)) return nullptr;
         last_ = {id, &w_.shapes[b.shape[i]], {{b.px[i], b.py[i], b.pz[i]}, {b.qx[i], b.qy[i], b.qz[i], b.qw[i]}}};
         lastAccepted_ = true;
@@ -93,6 +94,7 @@ public:
         const detail::MovingBodies& m = w_.bodies.moving;
         const bool kinematic = (m.flags[dense] & detail::kFlagKinematic) != 0;
         if (!(kinematic ? filter_.includeKinematic : filter_.includeDynamic)) return nullptr;
+        if (!filter_.includeSensors && (m.flags[dense] & detail::kFlagSensor)) return nullptr;
         const std::uint32_t slot = m.slot[dense];
         const BodyId id = w_.bodies.idAt(slot);
         if (!accepts(m.filterCategory[dense], m.filterMask[dense], id)) return nullptr;

@@ -74,6 +74,7 @@ void forEachArray(Bodies& b, Op&& op) {
     op(b.filterCategory);
     op(b.filterMask);
     op(b.userData);
+    op(b.flags);
     op(b.slot);
 }
 

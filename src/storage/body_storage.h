@@ -22,6 +22,9 @@ enum BodyFlags : std::uint8_t {
     kFlagAsleep = 1u << 2,   ///< resting in a sleeping island: the broad phase skips pairs of two such bodies
     kFlagNoSleep = 1u << 3,  ///< BodyDef::allowSleep was false: its island never sleeps
     kFlagBullet = 1u << 4,   ///< BodyDef::bullet: continuous collision against dynamic bodies too
+    // The two below are also static bodies' flags (StaticBodies::flags).
+    kFlagContactEvents = 1u << 5,  ///< BodyDef::contactEvents: its pairs are reported (src/events/)
+    kFlagSensor = 1u << 6,         ///< BodyDef::sensor: reports overlaps, pushes nothing (src/events/)
 };
 
 /// Dynamic and kinematic bodies. Position is the centre of mass; the user-facing origin is
@@ -65,6 +68,7 @@ struct StaticBodies {
     std::vector<std::uint32_t> shape;
     std::vector<std::uint32_t> filterCategory, filterMask;
     std::vector<std::uint64_t> userData;
+    std::vector<std::uint8_t> flags;  ///< kFlagContactEvents, kFlagSensor
     std::vector<std::uint32_t> slot;
 
     std::uint32_t size() const { return static_cast<std::uint32_t>(slot.size()); }

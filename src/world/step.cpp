@@ -42,6 +42,10 @@ void planStep(World::Impl& w, StepContext& step, float dt) {
     step.brokenJointsBefore = w.joints.brokenReports().size();
     if (step.joints) profile.joints = w.joints.activeCount();
     step.continuous = step.effects.has(Effect::ContinuousCollision) && w.bodies.moving.size() > 0;
+    step.contactEvents = w.contactEventStage.active(w.listeningBodies);
+    step.sensors = w.sensorEventStage.active(w.sensorBodies);
+    w.contactEvents.begins.clear(), w.contactEvents.ends.clear(), w.contactEvents.hits.clear();
+    w.sensorEvents.begins.clear(), w.sensorEvents.ends.clear();
 }
 
 detail::SolverParts solverParts(World::Impl& w) {
@@ -151,6 +155,11 @@ void findContacts(World::Impl& w, StepContext& step) {
             step.pool, w.contacts);
     }
     profile.reusedManifolds = w.narrowPhase.reusedManifolds();
+    if (step.sensors || step.contactEvents) {
+        const auto timer = step.time(Stage::Events);
+        if (step.sensors) profile.sensorPairs = w.sensorEventStage.separate(w.contacts, w.bodies);
+        if (step.contactEvents) w.contactEventStage.listen(w.contacts, w.bodies, step.pool);
+    }
     profile.manifolds = static_cast<std::uint32_t>(w.contacts.manifolds.size());
     profile.contactPoints = w.contacts.pointCount;
     {
@@ -179,6 +188,10 @@ void findContacts(World::Impl& w, StepContext& step) {
         profile.batchedJoints = w.jointSolver.batchedJoints();
     }
     step.solve = !w.contactSolver.empty() || step.joints;
+    if (step.contactEvents) {
+        const auto timer = step.time(Stage::Events);
+        w.contactEventStage.findLanes(w.contactSolver.empty() ? nullptr : &w.contactSolver);
+    }
 }
 
 void solveVelocities(World::Impl& w, StepContext& step) {
@@ -199,6 +212,10 @@ void relaxAndBounce(World::Impl& w, StepContext& step) {
     if (!step.solve) return;
     detail::SolverParts solver = solverParts(w);
     detail::relaxAndBounce(solver, step);
+    if (step.contactEvents && !w.contactSolver.empty()) {
+        const auto timer = step.time(Stage::Events);
+        w.contactEventStage.addSubstepImpulses(w.contactSolver, w.contacts);
+    }
 }
 
 void finishContinuousCollision(World::Impl& w, StepContext& step) {
@@ -226,6 +243,20 @@ void fallAsleep(World::Impl& w, StepContext& step) {
                               w.settings.sleep, step.dt, step.pool);
     }
     step.profile.sleepingBodies = w.sleeping.sleepingBodies();
+}
+
+/// Contact and sensor events of the step, from its final contacts and the bodies' sleep.
+void reportEvents(World::Impl& w, StepContext& step) {
+    w.contactsOfLastStep = step.collided;
+    if (!step.contactEvents && !step.sensors) return;
+    const auto timer = step.time(Stage::Events);
+    if (step.contactEvents)
+        w.contactEventStage.report(step.collided ? &w.contacts : nullptr, w.contactCache, w.bodies,
+                                   w.settings.solver.linearSlop, w.settings.hitEventSpeed, step.pool, w.contactEvents);
+    if (step.sensors) w.sensorEventStage.report(w.bodies, w.sensorEvents);
+    step.profile.events = static_cast<std::uint32_t>(w.contactEvents.begins.size() + w.contactEvents.ends.size() +
+                                                     w.contactEvents.hits.size() + w.sensorEvents.begins.size() +
+                                                     w.sensorEvents.ends.size());
 }
 
 void finishStep(World::Impl& w, StepContext& step, detail::Clock::time_point begin) {
@@ -274,6 +305,7 @@ void World::step(float dt) {
     finishContinuousCollision(w, step);
     rememberContacts(w, step);
     fallAsleep(w, step);
+    reportEvents(w, step);
     finishStep(w, step, begin);
 }
 

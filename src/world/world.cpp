@@ -156,6 +156,9 @@ BodyId World::createBody(const BodyDef& def) {
         s.filterCategory[i] = def.filter.category;
         s.filterMask[i] = def.filter.mask;
         s.userData[i] = def.userData;
+        s.flags[i] = static_cast<std::uint8_t>((def.contactEvents ? detail::kFlagContactEvents : 0) |
+                                               (def.sensor ? detail::kFlagSensor : 0));
+        w.countEventFlags(s.flags[i], 1);
         w.shapeUsers[def.shape.index] += 1;
         w.effectsDirty = true;
         w.broadPhase.staticAdded(id.index, w.bodies, w.shapes, *w.pool);
@@ -178,9 +181,11 @@ BodyId World::createBody(const BodyDef& def) {
     m.filterCategory[i] = def.filter.category;
     m.filterMask[i] = def.filter.mask;
     m.userData[i] = def.userData;
-    m.flags[i] =
-        static_cast<std::uint8_t>((kinematic ? detail::kFlagKinematic : 0) |
-                                  (def.allowSleep ? 0 : detail::kFlagNoSleep) | (def.bullet ? detail::kFlagBullet : 0));
+    m.flags[i] = static_cast<std::uint8_t>(
+        (kinematic ? detail::kFlagKinematic : 0) | (def.allowSleep ? 0 : detail::kFlagNoSleep) |
+        (def.bullet ? detail::kFlagBullet : 0) | (def.contactEvents ? detail::kFlagContactEvents : 0) |
+        (def.sensor ? detail::kFlagSensor : 0));
+    w.countEventFlags(m.flags[i], 1);
     w.setMassFromShape(i);
     const Vec3 com = def.position + rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]});
     m.px[i] = com.x, m.py[i] = com.y, m.pz[i] = com.z;
@@ -192,9 +197,10 @@ BodyId World::createBody(const BodyDef& def) {
 void World::destroyBody(BodyId id) {
     Impl& w = *impl_;
     const BodySlot& slot = w.slotOf(id, "World::destroyBody");
-    const std::uint32_t shape =
-        slot.set == BodySet::Moving ? w.bodies.moving.shape[slot.dense] : w.bodies.statics.shape[slot.dense];
+    const bool moving = slot.set == BodySet::Moving;
+    const std::uint32_t shape = moving ? w.bodies.moving.shape[slot.dense] : w.bodies.statics.shape[slot.dense];
     w.shapeUsers[shape] -= 1;
+    w.countEventFlags(moving ? w.bodies.moving.flags[slot.dense] : w.bodies.statics.flags[slot.dense], -1);
     // What rested on the body falls: its own sleeping island and the islands it touched wake.
     if (slot.set == BodySet::Moving) w.wake(slot.dense);
     w.sleeping.wakeTouching(id.index, w.bodies, w.contactCache);
@@ -503,6 +509,7 @@ void World::setSettings(const WorldSettings& s) {
     requireNonNegative(kWhere, "settings.sleep.linearThreshold", s.sleep.linearThreshold);
     requireNonNegative(kWhere, "settings.sleep.angularThreshold", s.sleep.angularThreshold);
     requireNonNegative(kWhere, "settings.sleep.timeToSleep", s.sleep.timeToSleep);
+    requireNonNegative(kWhere, "settings.hitEventSpeed", s.hitEventSpeed);
     if ((s.effects.bits & ~EffectSet::all().bits) != 0)
         fail(kWhere, "settings.effects has unknown bits (" + std::to_string(s.effects.bits) + ")");
     Impl& w = *impl_;

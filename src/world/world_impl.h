@@ -12,6 +12,8 @@
 #include "contacts/resting_loads.h"
 #include "core/parallel.h"
 #include "core/profile.h"
+#include "events/contact_events.h"
+#include "events/sensor_events.h"
 #include "integrate/integrate.h"
 #include "islands/islands.h"
 #include "islands/sleep.h"
@@ -66,6 +68,8 @@ struct World::Impl {
     detail::Contacts contacts;
     detail::ContactCache contactCache;
     std::vector<detail::PointImpulse> impulses;
+    /// The contacts above are the last step's (the collision stages ran in it): World::contactsOf reads them.
+    bool contactsOfLastStep = false;
     detail::RestingLoads restingLoads;
     detail::IslandBuilder islandBuilder;
     detail::Islands islands;
@@ -78,6 +82,14 @@ struct World::Impl {
     detail::JointStore joints;
     detail::JointSolver jointSolver;
     detail::JointCoupling jointCoupling;
+    /// Events (src/events/): bodies that ask for contact events and sensors, counted so that a world without them
+    /// runs no event code; the last step's events.
+    std::uint32_t listeningBodies = 0;
+    std::uint32_t sensorBodies = 0;
+    detail::ContactEventStage contactEventStage;
+    detail::SensorEventStage sensorEventStage;
+    ContactEvents contactEvents;
+    SensorEvents sensorEvents;
     std::vector<std::uint32_t> nonFinite;
     std::vector<BodyId> frozenReports;
     /// The scene queries' trees (src/query/); told of every body added, removed or moved outside the step.
@@ -173,6 +185,12 @@ struct World::Impl {
             m.irx[i] = pi.rotation.x, m.iry[i] = pi.rotation.y, m.irz[i] = pi.rotation.z, m.irw[i] = pi.rotation.w;
         }
         refreshWorldInertia(i);
+    }
+
+    /// Keeps listeningBodies and sensorBodies: `change` is +1 for a body added with `flags`, -1 for one removed.
+    void countEventFlags(std::uint8_t flags, int change) {
+        if (flags & detail::kFlagContactEvents) listeningBodies += static_cast<std::uint32_t>(change);
+        if (flags & detail::kFlagSensor) sensorBodies += static_cast<std::uint32_t>(change);
     }
 
     /// Wakes the sleeping island of a moving body about to be pushed, moved or changed through the API.
