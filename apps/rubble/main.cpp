@@ -221,8 +221,8 @@ void printStageTable(const std::vector<TimingSamples>& stageMs, const TimingSamp
     std::printf("\n%-22s %8s %12s %8s %12s\n", "stage", "ran", "median ms", "share", "worst ms");
     for (int k = 0; k < rubble::kStageCount; ++k) {
         const auto stage = static_cast<rubble::Stage>(k);
-        // Continuous collision is a choice a scene makes: a scene without it has no row to show a zero in.
-        if (stage == rubble::Stage::Ccd && stageMs[k].empty()) continue;
+        // Continuous collision and events are choices a scene makes: a scene without them has no row to show a zero in.
+        if ((stage == rubble::Stage::Ccd || stage == rubble::Stage::Events) && stageMs[k].empty()) continue;
         const double m = stageMs[k].median();
         std::printf("%-22s %8llu %12.4f %7.1f%% %12.4f\n", std::string(rubble::stageName(stage)).c_str(),
                     static_cast<unsigned long long>(stageMs[k].count()), m,
@@ -321,11 +321,13 @@ int run(const Options& options) {
     ProgressBar progress(steps);
     std::uint32_t frozen = 0;
     long droppedSteps = 0;
+    std::uint64_t events = 0;
     for (long s = 0; s < steps; ++s) {
         world.step(scene.settings.timeStep);
         figures.record(world);
         const rubble::Profile& p = world.lastProfile();
         stepMs.add(p.stepMs);
+        events += p.events;
         for (int k = 0; k < rubble::kStageCount; ++k)
             if (p.stages[k].ran) stageMs[k].add(p.stages[k].ms);
         if (trace) trace->addStep(p);
@@ -387,6 +389,9 @@ int run(const Options& options) {
                     static_cast<unsigned long long>(stepMs.count()));
     }
 
+    if (!stageMs[static_cast<int>(rubble::Stage::Events)].empty())
+        std::printf("events     %llu contact and sensor events over the run; %u sensor pairs in the last step\n",
+                    static_cast<unsigned long long>(events), world.lastProfile().sensorPairs);
     std::printf("\n");
     for (const rubble::SceneFigureMeter::Result& figure : figures.results(world))
         std::printf("figure     %s\n", figure.text.c_str());

@@ -11,6 +11,7 @@
 
 #include "rubble/body.h"
 #include "rubble/debug_draw.h"
+#include "rubble/events.h"
 #include "rubble/id.h"
 #include "rubble/math.h"
 #include "rubble/profile.h"
@@ -137,9 +138,32 @@ struct CastRayCommand {
     QueryFilter filter;
 };
 
-using Command = std::variant<AddForceCommand, AddForceAtPointCommand, AddTorqueCommand, ApplyImpulseCommand,
-                             ApplyImpulseAtPointCommand, ApplyAngularImpulseCommand, SetVelocityCommand,
-                             SetTransformCommand, SpawnBodyCommand, RemoveBodyCommand, CastRayCommand>;
+/// Moves a kinematic body to a pose over `duration` seconds (World::moveKinematic, steered again every step with the
+/// time left), and stops it there. A game sends one per frame with the frame's time; a later move of the same body
+/// replaces the one under way.
+struct MoveKinematicCommand {
+    BodyId body;
+    Vec3 position;
+    Quat orientation;
+    float duration = 0;  ///< s, rounded to whole steps; less than one step: the next step
+};
+/// World::setContactEvents.
+struct SetContactEventsCommand {
+    BodyId body;
+    bool enabled = true;
+};
+
+using Command =
+    std::variant<AddForceCommand, AddForceAtPointCommand, AddTorqueCommand, ApplyImpulseCommand,
+                 ApplyImpulseAtPointCommand, ApplyAngularImpulseCommand, SetVelocityCommand, SetTransformCommand,
+                 SpawnBodyCommand, RemoveBodyCommand, CastRayCommand, MoveKinematicCommand, SetContactEventsCommand>;
+
+/// The events of one step (World::contactEvents, World::sensorEvents), as the runtime hands them to the game.
+struct StepEvents {
+    std::uint64_t step = 0;  ///< World::stepCount() after the step
+    ContactEvents contacts;
+    SensorEvents sensors;
+};
 
 /// A command as it was applied: before the step that took the world from `step` to `step + 1`.
 struct RecordedInput {
@@ -206,6 +230,10 @@ public:
     std::vector<std::string> takeInputErrors();
     /// The inputs applied since the last call (RuntimeSettings::recordInputs), in the order they were applied.
     std::vector<RecordedInput> takeRecording();
+    /// The events of the steps run since the last call that had any (bodies that ask: BodyDef::contactEvents,
+    /// BodyDef::sensor), oldest first. Kept for up to one second of steps (rate of them): a game that stops taking
+    /// them loses the oldest, not its memory.
+    std::vector<StepEvents> takeEvents();
 
     // ---- Render side (one render thread; never blocks the physics thread) ----
 

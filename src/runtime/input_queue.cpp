@@ -44,6 +44,14 @@ void validateCommand(const Command& command) {
                 requireFinite(kWhere, "SetTransformCommand.position", c.position);
                 requireUnit(kWhere, "SetTransformCommand.orientation", c.orientation);
             },
+            [](const MoveKinematicCommand& c) {
+                requireFinite(kWhere, "MoveKinematicCommand.position", c.position);
+                requireUnit(kWhere, "MoveKinematicCommand.orientation", c.orientation);
+                if (!(c.duration >= 0) || !std::isfinite(c.duration))
+                    fail(kWhere, "MoveKinematicCommand.duration must be finite and >= 0 (got " +
+                                     std::to_string(c.duration) + ")");
+            },
+            [](const SetContactEventsCommand&) {},
             [](const SpawnBodyCommand&) {},  // the world validates the BodyDef; errors go to the future
             [](const RemoveBodyCommand&) {},
             [](const CastRayCommand& c) {
@@ -62,7 +70,8 @@ bool changesLayout(const Command& command) {
            std::holds_alternative<SetTransformCommand>(command);
 }
 
-void applyCommand(World& world, const Command& command, Reply* reply, std::vector<std::string>& errors) {
+void applyCommand(World& world, const Command& command, float stepSeconds, KinematicMoves& moves, Reply* reply,
+                  std::vector<std::string>& errors) {
     try {
         std::visit(
             Overloaded{
@@ -77,6 +86,8 @@ void applyCommand(World& world, const Command& command, Reply* reply, std::vecto
                     world.setAngularVelocity(c.body, c.angular);
                 },
                 [&](const SetTransformCommand& c) { world.setTransform(c.body, c.position, c.orientation); },
+                [&](const MoveKinematicCommand& c) { moves.start(world, c, stepSeconds); },
+                [&](const SetContactEventsCommand& c) { world.setContactEvents(c.body, c.enabled); },
                 [&](const SpawnBodyCommand& c) {
                     const BodyId id = world.createBody(c.def);
                     if (reply && std::holds_alternative<std::promise<BodyId>>(*reply))

@@ -11,6 +11,7 @@
 
 #include "rubble/runtime.h"
 #include "rubble/world.h"
+#include "runtime/kinematic_moves.h"
 
 namespace rubble::detail {
 
@@ -24,9 +25,11 @@ struct PendingCommand {
 /// Refuses non-finite numbers and zero directions on the submitting thread (rubble::Error naming the field).
 void validateCommand(const Command& command);
 
-/// Applies one command to the world and fulfils its reply. A command the world refuses (a stale handle, a bad
-/// BodyDef) does not stop the runtime: its error goes to the reply when there is one, else to `errors`.
-void applyCommand(World& world, const Command& command, Reply* reply, std::vector<std::string>& errors);
+/// Applies one command to the world before a step of `stepSeconds` (kinematic moves go to `moves`) and fulfils its
+/// reply. A command the world refuses (a stale handle, a bad BodyDef) does not stop the runtime: its error goes to
+/// the reply when there is one, else to `errors`.
+void applyCommand(World& world, const Command& command, float stepSeconds, KinematicMoves& moves, Reply* reply,
+                  std::vector<std::string>& errors);
 
 /// True for commands that add, remove or teleport bodies, after which snapshots must be rewritten in full.
 bool changesLayout(const Command& command);

@@ -76,6 +76,7 @@ struct Runtime::Impl {
     std::uint64_t bufferLayout[detail::SnapshotBuffers::kCount] = {};
     std::uint64_t layoutVersion = 1;
     std::vector<detail::PendingCommand> applying;
+    detail::KinematicMoves kinematicMoves;
     std::vector<RecordedInput> newlyRecorded;
     std::vector<std::string> newErrors;
     double simTime = 0;
@@ -88,6 +89,7 @@ struct Runtime::Impl {
     std::mutex outputMutex;
     std::vector<RecordedInput> recording;
     std::vector<std::string> errors;
+    std::vector<StepEvents> events;
 
     // Thread control.
     std::thread thread;
@@ -160,10 +162,12 @@ struct Runtime::Impl {
         const std::uint64_t step = world.stepCount();
         for (detail::PendingCommand& c : commands) {
             if (settings.recordInputs) newlyRecorded.push_back({step, c.command});
-            detail::applyCommand(world, c.command, &c.reply, newErrors);
+            detail::applyCommand(world, c.command, static_cast<float>(clock.stepSeconds()), kinematicMoves, &c.reply,
+                                 newErrors);
             if (detail::changesLayout(c.command)) ++layoutVersion;
         }
         commands.clear();
+        kinematicMoves.beforeStep(world, static_cast<float>(clock.stepSeconds()), newErrors);
         if (!newlyRecorded.empty() || !newErrors.empty()) {
             std::lock_guard lock(outputMutex);
             recording.insert(recording.end(), newlyRecorded.begin(), newlyRecorded.end());
@@ -173,10 +177,23 @@ struct Runtime::Impl {
         }
         const double dt = clock.stepSeconds();
         world.step(static_cast<float>(dt));
+        kinematicMoves.afterStep(world);
+        keepEvents();
         simTime += dt;
         stats.steps.fetch_add(1, std::memory_order_relaxed);
         stats.lastStepMs.store(world.lastProfile().stepMs, std::memory_order_relaxed);
         publish(dueClock);
+    }
+
+    /// The step's events, for takeEvents; the oldest go once a second of steps is waiting.
+    void keepEvents() {
+        const ContactEvents& c = world.contactEvents();
+        const SensorEvents& s = world.sensorEvents();
+        if (c.begins.empty() && c.ends.empty() && c.hits.empty() && s.begins.empty() && s.ends.empty()) return;
+        std::lock_guard lock(outputMutex);
+        events.push_back({world.stepCount(), c, s});
+        const auto kept = static_cast<std::size_t>(std::max(1.0, settings.rate));
+        if (events.size() > kept) events.erase(events.begin(), events.end() - static_cast<std::ptrdiff_t>(kept));
     }
 
     void stepFromQueue(double dueClock) {
@@ -429,6 +446,13 @@ std::vector<RecordedInput> Runtime::takeRecording() {
     std::lock_guard lock(impl_->outputMutex);
     std::vector<RecordedInput> out;
     out.swap(impl_->recording);
+    return out;
+}
+
+std::vector<StepEvents> Runtime::takeEvents() {
+    std::lock_guard lock(impl_->outputMutex);
+    std::vector<StepEvents> out;
+    out.swap(impl_->events);
     return out;
 }
 

@@ -463,9 +463,9 @@ void checkKeys(const Json& obj, const Loc& at, std::initializer_list<std::string
 
 /// Keys every generator accepts besides its own.
 constexpr std::string_view kGeneratorBodyKeys[] = {
-    "type",     "shape",  "shapes",         "body_type",       "rotation",      "velocity",  "angular_velocity",
-    "material", "filter", "linear_damping", "angular_damping", "gravity_scale", "user_data", "allow_sleep",
-    "bullet"};
+    "type",     "shape",          "shapes",         "body_type",       "rotation",      "velocity",  "angular_velocity",
+    "material", "filter",         "linear_damping", "angular_damping", "gravity_scale", "user_data", "allow_sleep",
+    "bullet",   "contact_events", "sensor"};
 
 void require(const Json& obj, const Loc& at, std::string_view key) {
     if (!obj.contains(key)) at.fail("missing required key '" + std::string(key) + "'");
@@ -590,7 +590,8 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
                "baumgarte",
                "linear_slop",
                "manifold_reuse_distance",
-               "contact_feature_drift"});
+               "contact_feature_drift",
+               "hit_event_speed"});
     // clang-format on
     WorldSettings& s = scene.settings;
     if (j.contains("dt")) s.timeStep = getFloatIn(j["dt"], at / "dt", limits::kMinTimeStep, limits::kMaxTimeStep, "s");
@@ -645,6 +646,7 @@ void Builder::parseSettings(const Json& j, const Loc& at) {
     solverFloat("linear_slop", s.solver.linearSlop, Sign::NonNegative);
     solverFloat("manifold_reuse_distance", s.manifoldReuseDistance, Sign::NonNegative);
     solverFloat("contact_feature_drift", s.contactFeatureDrift, Sign::NonNegative);
+    solverFloat("hit_event_speed", s.hitEventSpeed, Sign::NonNegative);
     if (j.contains("sleep")) {
         const Loc sl = at / "sleep";
         const Json& o = expectObject(j["sleep"], sl, "a sleep settings object");
@@ -971,6 +973,8 @@ void Builder::parseBodyFields(const Json& j, const Loc& at, std::string_view typ
     if (j.contains("user_data")) def.userData = getUint64(j["user_data"], at / "user_data");
     if (j.contains("allow_sleep")) def.allowSleep = getBool(j["allow_sleep"], at / "allow_sleep");
     if (j.contains("bullet")) def.bullet = getBool(j["bullet"], at / "bullet");
+    if (j.contains("contact_events")) def.contactEvents = getBool(j["contact_events"], at / "contact_events");
+    if (j.contains("sensor")) def.sensor = getBool(j["sensor"], at / "sensor");
     // World::createBody refuses these too; here the message names the key.
     if (def.type == BodyType::Static) {
         if (def.linearVelocity != Vec3{}) (at / "velocity").fail(kStaticBodyMoves);
@@ -994,7 +998,8 @@ void Builder::parseBodies(const Json& j, const Loc& at) {
         const Json& o = expectObject(arr[i], b, "a body object");
         checkKeys(o, b,
                   {"shape", "type", "position", "rotation", "velocity", "angular_velocity", "material", "filter",
-                   "linear_damping", "angular_damping", "gravity_scale", "user_data", "allow_sleep", "bullet"});
+                   "linear_damping", "angular_damping", "gravity_scale", "user_data", "allow_sleep", "bullet",
+                   "contact_events", "sensor"});
         require(o, b, "shape");
         SceneBody body;
         body.shape = shapeRef(o["shape"], b / "shape");

@@ -109,6 +109,69 @@ TEST(Runtime, InputsRecordedOnALiveRunReplayToTheSameState) {
     EXPECT_NE(idle.world().stateHash(), liveHash);
 }
 
+namespace {
+
+/// A world with a kinematic platform and a listening box on it, and a thread that drives the platform through the
+/// input queue as a game would (one move a frame, not in step with the physics).
+World platformWorld(int threads) {
+    World world = test::boxesOnFloor(2, 1, threads);
+    BodyDef platform;
+    platform.type = BodyType::Kinematic;
+    platform.shape = world.createShape(BoxDef{{1, 0.1f, 1}});
+    platform.position = {4, 0.5f, 0};
+    world.createBody(platform);
+    BodyDef cargo;
+    cargo.shape = ShapeId{1, 1};  // the fixture's box shape
+    cargo.position = {4, 0.86f, 0};
+    world.createBody(cargo);
+    return world;
+}
+
+}  // namespace
+
+TEST(Runtime, KinematicMovesAndEventsRecordedOnALiveRunReplayToTheSameStateAndEvents) {
+    RuntimeSettings settings;
+    settings.rate = 240;
+    settings.recordInputs = true;
+    Runtime live(platformWorld(2), settings);
+    const std::vector<BodyId> all = live.world().bodies();
+    const BodyId platform = all[all.size() - 2], cargo = all.back();
+    live.start();
+    live.submit(SetContactEventsCommand{cargo, true});
+    for (int frame = 1; frame <= 30; ++frame) {
+        const float t = static_cast<float>(frame) / 60.0f;
+        live.submit(MoveKinematicCommand{platform, {4 + 0.3f * t, 0.5f + 0.4f * t, 0}, Quat{}, 1.0f / 60.0f});
+        std::this_thread::sleep_for(std::chrono::microseconds(16667));
+    }
+    std::this_thread::sleep_for(20ms);
+    live.stop();
+    const std::vector<RecordedInput> inputs = live.takeRecording();
+    const std::vector<StepEvents> liveEvents = live.takeEvents();
+    EXPECT_TRUE(live.takeInputErrors().empty());
+    EXPECT_EQ(inputs.size(), 31u);
+    // The box landed on the platform and touched it: a begin among the events.
+    ASSERT_FALSE(liveEvents.empty());
+    EXPECT_FALSE(liveEvents.front().contacts.begins.empty());
+    // The last move arrived (20 ms of steps passed after it was sent) and stopped there.
+    EXPECT_NEAR(live.world().position(platform).x, 4.15f, 1e-4f);
+    EXPECT_NEAR(live.world().position(platform).y, 0.7f, 1e-4f);
+    EXPECT_EQ(live.world().linearVelocity(platform), Vec3{});
+
+    RuntimeSettings replaySettings = settings;
+    replaySettings.recordInputs = false;
+    Runtime replayed(platformWorld(1), replaySettings);
+    replayed.replay(inputs, live.world().stepCount());
+    EXPECT_EQ(replayed.world().stateHash(), live.world().stateHash());
+    const std::vector<StepEvents> replayedEvents = replayed.takeEvents();
+    ASSERT_EQ(replayedEvents.size(), liveEvents.size());
+    for (std::size_t k = 0; k < liveEvents.size(); ++k) {
+        EXPECT_EQ(replayedEvents[k].step, liveEvents[k].step);
+        EXPECT_EQ(replayedEvents[k].contacts.begins.size(), liveEvents[k].contacts.begins.size());
+        EXPECT_EQ(replayedEvents[k].contacts.ends.size(), liveEvents[k].contacts.ends.size());
+        EXPECT_EQ(replayedEvents[k].contacts.hits.size(), liveEvents[k].contacts.hits.size());
+    }
+}
+
 TEST(Runtime, ReplayRefusesInputsOutOfStepOrder) {
     Runtime runtime(test::boxesOnFloor(1, 1));
     const BodyId box = runtime.world().bodies()[1];
