@@ -49,6 +49,10 @@ struct BodyDef {
     /// It sees the dynamic and kinematic bodies its collision filter accepts (static ones from a moving sensor too),
     /// but not other sensors. A dynamic sensor still falls under gravity: make it kinematic to place it.
     bool sensor = false;
+    /// False: the body's contacts are never solved. It passes through everything and pushes nothing, but sensors see
+    /// it and queries hit it: the body of a character whose controller does its own collision (CharacterController),
+    /// or a ghost. Continuous collision neither stops it nor stops at it.
+    bool contactResponse = true;
     std::uint64_t userData = 0;
 };
 

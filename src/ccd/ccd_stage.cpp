@@ -57,8 +57,9 @@ void ContinuousCollision::run(BodyStorage& storage, const std::vector<Shape>& sh
     hit_.assign(n, 0);
     pool.forChunks(n, kBodyChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         for (std::size_t i = begin; i < end; ++i) {
-            // A sensor pushes nothing, so nothing stops it either.
-            if ((m.flags[i] & (kFlagKinematic | kFlagFrozen | kFlagAsleep | kFlagSensor)) != 0 || m.invMass[i] == 0)
+            // A sensor (or a body without contact response) pushes nothing, so nothing stops it either.
+            if ((m.flags[i] & (kFlagKinematic | kFlagFrozen | kFlagAsleep | kFlagSensor | kFlagNoResponse)) != 0 ||
+                m.invMass[i] == 0)
                 continue;
             const BodySweep sweep({px_[i], py_[i], pz_[i]}, {qx_[i], qy_[i], qz_[i], qw_[i]},
                                   {m.px[i], m.py[i], m.pz[i]}, {m.qx[i], m.qy[i], m.qz[i], m.qw[i]},
@@ -136,7 +137,8 @@ bool ContinuousCollision::sweepBody(std::uint32_t i, BodyStorage& storage, const
     const auto& slots = storage.slots();
     const auto visit = [&](const StaticBvh::PrimitiveRef& ref) {
         const std::uint32_t d = slots[ref.body].dense;
-        if (!filtersAccept(category, mask, st.filterCategory[d], st.filterMask[d]) || (st.flags[d] & kFlagSensor))
+        if (!filtersAccept(category, mask, st.filterCategory[d], st.filterMask[d]) ||
+            (st.flags[d] & (kFlagSensor | kFlagNoResponse)))
             return;
         const Shape& target = shapes[st.shape[d]];
         const Transform pose{{st.px[d], st.py[d], st.pz[d]}, {st.qx[d], st.qy[d], st.qz[d], st.qw[d]}};
@@ -165,7 +167,8 @@ bool ContinuousCollision::sweepBody(std::uint32_t i, BodyStorage& storage, const
     for (const StaticBvh::Tree* tree : sweeps.staticTree.trees()) overlapTree(*tree, lo - grow, hi + grow, visit);
     if (dynamicTargets)
         for (const std::uint32_t j : *dynamicTargets) {
-            if (!filtersAccept(category, mask, m.filterCategory[j], m.filterMask[j]) || (m.flags[j] & kFlagSensor))
+            if (!filtersAccept(category, mask, m.filterCategory[j], m.filterMask[j]) ||
+                (m.flags[j] & (kFlagSensor | kFlagNoResponse)))
                 continue;
             forEachPart(shapes[m.shape[j]], movingPose(m, j), sweepAgainst);
         }

@@ -6,8 +6,8 @@ namespace rubble::detail {
 
 namespace {
 
-bool isSensor(const BodyStorage& storage, std::uint32_t dense, bool isStatic) {
-    return ((isStatic ? storage.statics.flags[dense] : storage.moving.flags[dense]) & kFlagSensor) != 0;
+std::uint8_t flagsOf(const BodyStorage& storage, std::uint32_t dense, bool isStatic) {
+    return isStatic ? storage.statics.flags[dense] : storage.moving.flags[dense];
 }
 
 BodyId idOf(const BodyStorage& storage, std::uint32_t dense, bool isStatic) {
@@ -28,8 +28,9 @@ std::uint32_t SensorEventStage::separate(Contacts& contacts, const BodyStorage& 
     std::uint32_t points = 0;
     for (std::size_t k = 0; k < n; ++k) {
         const ContactPair& pair = contacts.pairs[k];
-        const bool sensorA = isSensor(storage, pair.a, pair.aStatic), sensorB = isSensor(storage, pair.b, pair.bStatic);
-        if (!sensorA && !sensorB) {
+        const std::uint8_t flagsA = flagsOf(storage, pair.a, pair.aStatic);
+        const std::uint8_t flagsB = flagsOf(storage, pair.b, pair.bStatic);
+        if (!((flagsA | flagsB) & (kFlagSensor | kFlagNoResponse))) {
             if (kept != k) {
                 contacts.pairs[kept] = pair;
                 contacts.manifolds[kept] = contacts.manifolds[k];
@@ -38,8 +39,9 @@ std::uint32_t SensorEventStage::separate(Contacts& contacts, const BodyStorage& 
             ++kept;
             continue;
         }
-        // Sensors do not see each other.
-        if (sensorA && sensorB) continue;
+        // Sensors do not see each other; a pair with a body without response and no sensor is simply not solved.
+        const bool sensorA = (flagsA & kFlagSensor) != 0, sensorB = (flagsB & kFlagSensor) != 0;
+        if (sensorA == sensorB) continue;
         if (!overlaps(contacts.manifolds[k])) continue;
         const BodyId a = idOf(storage, pair.a, pair.aStatic), b = idOf(storage, pair.b, pair.bStatic);
         now_.push_back(sensorA ? eventPair(a, b) : eventPair(b, a));

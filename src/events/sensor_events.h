@@ -15,12 +15,13 @@ namespace rubble::detail {
 
 class SensorEventStage {
 public:
-    /// False when there is no sensor and no overlap is held: then neither call needs to run.
-    bool active(std::uint32_t sensorBodies) const { return sensorBodies > 0 || !overlaps_.empty(); }
+    /// False when there is no sensor or body without contact response and no overlap is held: then neither call
+    /// needs to run.
+    bool active(std::uint32_t separatedBodies) const { return separatedBodies > 0 || !overlaps_.empty(); }
 
-    /// First substep, after the narrow phase: takes every manifold with a sensor side out of `contacts` (the others
-    /// keep their order) and keeps the pairs of a sensor and a body that is not one which overlap. Returns how many
-    /// manifolds it took out.
+    /// First substep, after the narrow phase: takes every manifold with a sensor side, or a side without contact
+    /// response, out of `contacts` (the others keep their order) and keeps the pairs of a sensor and a body that is
+    /// not one which overlap. Returns how many manifolds it took out.
     std::uint32_t separate(Contacts& contacts, const BodyStorage& storage);
     /// After the step: the overlaps that began and ended since the last report, appended to `out`.
     void report(const BodyStorage& storage, SensorEvents& out);

@@ -25,6 +25,7 @@ enum BodyFlags : std::uint8_t {
     // The two below are also static bodies' flags (StaticBodies::flags).
     kFlagContactEvents = 1u << 5,  ///< BodyDef::contactEvents: its pairs are reported (src/events/)
     kFlagSensor = 1u << 6,         ///< BodyDef::sensor: reports overlaps, pushes nothing (src/events/)
+    kFlagNoResponse = 1u << 7,     ///< BodyDef::contactResponse false: its contacts are never solved (src/events/)
 };
 
 /// Dynamic and kinematic bodies. Position is the centre of mass; the user-facing origin is
@@ -68,7 +69,7 @@ struct StaticBodies {
     std::vector<std::uint32_t> shape;
     std::vector<std::uint32_t> filterCategory, filterMask;
     std::vector<std::uint64_t> userData;
-    std::vector<std::uint8_t> flags;  ///< kFlagContactEvents, kFlagSensor
+    std::vector<std::uint8_t> flags;  ///< kFlagContactEvents, kFlagSensor, kFlagNoResponse
     std::vector<std::uint32_t> slot;
 
     std::uint32_t size() const { return static_cast<std::uint32_t>(slot.size()); }

@@ -43,7 +43,7 @@ void planStep(World::Impl& w, StepContext& step, float dt) {
     if (step.joints) profile.joints = w.joints.activeCount();
     step.continuous = step.effects.has(Effect::ContinuousCollision) && w.bodies.moving.size() > 0;
     step.contactEvents = w.contactEventStage.active(w.listeningBodies);
-    step.sensors = w.sensorEventStage.active(w.sensorBodies);
+    step.sensors = w.sensorEventStage.active(w.separatedBodies);
     w.contactEvents.begins.clear(), w.contactEvents.ends.clear(), w.contactEvents.hits.clear();
     w.sensorEvents.begins.clear(), w.sensorEvents.ends.clear();
 }

@@ -37,7 +37,7 @@ struct StepContext {
     bool continuous = false;        ///< continuous collision sweeps the fast bodies
     bool velocitiesChange = false;  ///< gravity, a force, damping or rotation: integrate_velocities runs
     bool contactEvents = false;     ///< a body asks for contact events, or a pair is still reported
-    bool sensors = false;           ///< a sensor exists, or an overlap is still reported
+    bool sensors = false;  ///< a sensor or a body without contact response exists, or an overlap is still reported
     std::size_t brokenJointsBefore = 0;
 
     // Decided in the first substep.

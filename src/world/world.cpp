@@ -157,7 +157,8 @@ BodyId World::createBody(const BodyDef& def) {
         s.filterMask[i] = def.filter.mask;
         s.userData[i] = def.userData;
         s.flags[i] = static_cast<std::uint8_t>((def.contactEvents ? detail::kFlagContactEvents : 0) |
-                                               (def.sensor ? detail::kFlagSensor : 0));
+                                               (def.sensor ? detail::kFlagSensor : 0) |
+                                               (def.contactResponse ? 0 : detail::kFlagNoResponse));
         w.countEventFlags(s.flags[i], 1);
         w.shapeUsers[def.shape.index] += 1;
         w.effectsDirty = true;
@@ -184,7 +185,7 @@ BodyId World::createBody(const BodyDef& def) {
     m.flags[i] = static_cast<std::uint8_t>(
         (kinematic ? detail::kFlagKinematic : 0) | (def.allowSleep ? 0 : detail::kFlagNoSleep) |
         (def.bullet ? detail::kFlagBullet : 0) | (def.contactEvents ? detail::kFlagContactEvents : 0) |
-        (def.sensor ? detail::kFlagSensor : 0));
+        (def.sensor ? detail::kFlagSensor : 0) | (def.contactResponse ? 0 : detail::kFlagNoResponse));
     w.countEventFlags(m.flags[i], 1);
     w.setMassFromShape(i);
     const Vec3 com = def.position + rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]});

@@ -82,10 +82,11 @@ struct World::Impl {
     detail::JointStore joints;
     detail::JointSolver jointSolver;
     detail::JointCoupling jointCoupling;
-    /// Events (src/events/): bodies that ask for contact events and sensors, counted so that a world without them
-    /// runs no event code; the last step's events.
+    /// Events (src/events/): bodies that ask for contact events, and sensors and bodies without contact response
+    /// (whose manifolds leave the contacts), counted so that a world without them runs no event code; the last
+    /// step's events.
     std::uint32_t listeningBodies = 0;
-    std::uint32_t sensorBodies = 0;
+    std::uint32_t separatedBodies = 0;
     detail::ContactEventStage contactEventStage;
     detail::SensorEventStage sensorEventStage;
     ContactEvents contactEvents;
@@ -187,10 +188,10 @@ struct World::Impl {
         refreshWorldInertia(i);
     }
 
-    /// Keeps listeningBodies and sensorBodies: `change` is +1 for a body added with `flags`, -1 for one removed.
+    /// Keeps listeningBodies and separatedBodies: `change` is +1 for a body added with `flags`, -1 for one removed.
     void countEventFlags(std::uint8_t flags, int change) {
         if (flags & detail::kFlagContactEvents) listeningBodies += static_cast<std::uint32_t>(change);
-        if (flags & detail::kFlagSensor) sensorBodies += static_cast<std::uint32_t>(change);
+        if (flags & (detail::kFlagSensor | detail::kFlagNoResponse)) separatedBodies += static_cast<std::uint32_t>(change);
     }
 
     /// Wakes the sleeping island of a moving body about to be pushed, moved or changed through the API.

@@ -136,6 +136,28 @@ TEST(Sensors, FilteredBodiesAndOtherSensorsAreNotSeen) {
     EXPECT_FALSE(world.isSensor(seen));
 }
 
+TEST(Sensors, MovingSensorSeesStaticBodiesAndBodiesWithoutResponse) {
+    World world;
+    const BodyId floor = addFloor(world);
+    const BodyId sensor = addSensorBox(world, BodyType::Kinematic, {0, 0.2f, 0}, {0.5f, 0.5f, 0.5f});
+    BodyDef ghost;
+    ghost.type = BodyType::Kinematic;
+    ghost.shape = world.createShape(SphereDef{0.2f});
+    ghost.position = {3, 1, 0};
+    ghost.contactResponse = false;
+    const BodyId visitor = world.createBody(ghost);
+    world.step(kDt);
+    ASSERT_EQ(world.sensorEvents().begins.size(), 1u);
+    EXPECT_EQ(world.sensorEvents().begins[0].visitor, floor);
+    world.moveKinematic(visitor, {0, 0.5f, 0}, {}, kDt);
+    world.step(kDt);
+    world.setLinearVelocity(visitor, {});
+    world.step(kDt);
+    ASSERT_EQ(world.sensorEvents().begins.size(), 1u);
+    EXPECT_EQ(world.sensorEvents().begins[0].sensor, sensor);
+    EXPECT_EQ(world.sensorEvents().begins[0].visitor, visitor);
+}
+
 TEST(Sensors, QueriesAndContinuousCollisionPassThroughSensors) {
     WorldSettings settings;
     settings.effects = EffectSet::defaults().with(Effect::ContinuousCollision);
