@@ -191,7 +191,8 @@ struct World::Impl {
     /// Keeps listeningBodies and separatedBodies: `change` is +1 for a body added with `flags`, -1 for one removed.
     void countEventFlags(std::uint8_t flags, int change) {
         if (flags & detail::kFlagContactEvents) listeningBodies += static_cast<std::uint32_t>(change);
-        if (flags & (detail::kFlagSensor | detail::kFlagNoResponse)) separatedBodies += static_cast<std::uint32_t>(change);
+        if (flags & (detail::kFlagSensor | detail::kFlagNoResponse))
+            separatedBodies += static_cast<std::uint32_t>(change);
     }
 
     /// Wakes the sleeping island of a moving body about to be pushed, moved or changed through the API.
