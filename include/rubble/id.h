@@ -18,6 +18,7 @@ struct Handle {
 struct BodyTag;
 struct ShapeTag;
 struct JointTag;
+struct CharacterTag;
 
 /// Handle to a body. Stays valid while the body exists, whatever else is added or removed.
 using BodyId = Handle<BodyTag>;
@@ -26,5 +27,7 @@ using ShapeId = Handle<ShapeTag>;
 /// Handle to a joint. Stays valid until the joint is destroyed, or one of its bodies is (a broken joint keeps its
 /// handle: see World::isJointBroken).
 using JointId = Handle<JointTag>;
+/// Handle to a character a Runtime steps (Runtime::addCharacter).
+using CharacterId = Handle<CharacterTag>;
 
 }  // namespace rubble

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "rubble/body.h"
+#include "rubble/character.h"
 #include "rubble/debug_draw.h"
 #include "rubble/events.h"
 #include "rubble/id.h"
@@ -147,16 +148,33 @@ struct MoveKinematicCommand {
     Quat orientation;
     float duration = 0;  ///< s, rounded to whole steps; less than one step: the next step
 };
+/// Makes a character of the runtime (Runtime::addCharacter) walk at `velocity` (m/s, horizontal) from the next step
+/// until the next such command; jumpSpeed > 0 also makes it jump at that speed as soon as it stands on something.
+struct WalkCharacterCommand {
+    CharacterId character;
+    Vec3 velocity;
+    float jumpSpeed = 0;
+};
 /// World::setContactEvents.
 struct SetContactEventsCommand {
     BodyId body;
     bool enabled = true;
 };
 
-using Command =
-    std::variant<AddForceCommand, AddForceAtPointCommand, AddTorqueCommand, ApplyImpulseCommand,
-                 ApplyImpulseAtPointCommand, ApplyAngularImpulseCommand, SetVelocityCommand, SetTransformCommand,
-                 SpawnBodyCommand, RemoveBodyCommand, CastRayCommand, MoveKinematicCommand, SetContactEventsCommand>;
+using Command = std::variant<AddForceCommand, AddForceAtPointCommand, AddTorqueCommand, ApplyImpulseCommand,
+                             ApplyImpulseAtPointCommand, ApplyAngularImpulseCommand, SetVelocityCommand,
+                             SetTransformCommand, SpawnBodyCommand, RemoveBodyCommand, CastRayCommand,
+                             MoveKinematicCommand, SetContactEventsCommand, WalkCharacterCommand>;
+
+/// Where a character of the runtime is, after the last step (CharacterController's accessors).
+struct CharacterState {
+    Vec3 feet;
+    Vec3 velocity;
+    bool grounded = false;
+    BodyId ground;
+    Vec3 groundNormal;
+    BodyId body;  ///< its kinematic capsule, for rendering from the snapshots
+};
 
 /// The events of one step (World::contactEvents, World::sensorEvents), as the runtime hands them to the game.
 struct StepEvents {
@@ -207,6 +225,13 @@ public:
 
     /// The world, for set-up and inspection while stopped or paused. Throws rubble::Error while stepping.
     World& world();
+    /// A character the runtime moves every step, before the step and after the kinematic moves (so that it rides
+    /// them), as WalkCharacterCommand says. While stopped or paused (rubble::Error otherwise, and for bad settings).
+    CharacterId addCharacter(Vec3 feet, const CharacterSettings& settings = {});
+    /// Removes a character and its body, while stopped or paused.
+    void removeCharacter(CharacterId id);
+    /// The character after the last step (any thread); nullopt for one not in this runtime.
+    std::optional<CharacterState> character(CharacterId id) const;
     const RuntimeSettings& settings() const;
     /// Changes the rate, cap or recording while stopped or paused.
     void setSettings(const RuntimeSettings& settings);

@@ -52,6 +52,10 @@ void validateCommand(const Command& command) {
                                      std::to_string(c.duration) + ")");
             },
             [](const SetContactEventsCommand&) {},
+            [](const WalkCharacterCommand& c) {
+                requireFinite(kWhere, "WalkCharacterCommand.velocity", c.velocity);
+                requireNonNegative(kWhere, "WalkCharacterCommand.jumpSpeed", c.jumpSpeed);
+            },
             [](const SpawnBodyCommand&) {},  // the world validates the BodyDef; errors go to the future
             [](const RemoveBodyCommand&) {},
             [](const CastRayCommand& c) {
@@ -70,7 +74,7 @@ bool changesLayout(const Command& command) {
            std::holds_alternative<SetTransformCommand>(command);
 }
 
-void applyCommand(World& world, const Command& command, float stepSeconds, KinematicMoves& moves, Reply* reply,
+void applyCommand(World& world, const Command& command, CommandTargets targets, Reply* reply,
                   std::vector<std::string>& errors) {
     try {
         std::visit(
@@ -86,7 +90,8 @@ void applyCommand(World& world, const Command& command, float stepSeconds, Kinem
                     world.setAngularVelocity(c.body, c.angular);
                 },
                 [&](const SetTransformCommand& c) { world.setTransform(c.body, c.position, c.orientation); },
-                [&](const MoveKinematicCommand& c) { moves.start(world, c, stepSeconds); },
+                [&](const MoveKinematicCommand& c) { targets.moves.start(world, c, targets.stepSeconds); },
+                [&](const WalkCharacterCommand& c) { targets.characters.walk(c); },
                 [&](const SetContactEventsCommand& c) { world.setContactEvents(c.body, c.enabled); },
                 [&](const SpawnBodyCommand& c) {
                     const BodyId id = world.createBody(c.def);

@@ -12,6 +12,7 @@
 #include "rubble/runtime.h"
 #include "rubble/world.h"
 #include "runtime/kinematic_moves.h"
+#include "runtime/runtime_characters.h"
 
 namespace rubble::detail {
 
@@ -25,10 +26,17 @@ struct PendingCommand {
 /// Refuses non-finite numbers and zero directions on the submitting thread (rubble::Error naming the field).
 void validateCommand(const Command& command);
 
-/// Applies one command to the world before a step of `stepSeconds` (kinematic moves go to `moves`) and fulfils its
+/// What commands act on besides the world.
+struct CommandTargets {
+    float stepSeconds = 0;
+    KinematicMoves& moves;
+    RuntimeCharacters& characters;
+};
+
+/// Applies one command to the world (or the runtime's kinematic moves and characters) before a step and fulfils its
 /// reply. A command the world refuses (a stale handle, a bad BodyDef) does not stop the runtime: its error goes to
 /// the reply when there is one, else to `errors`.
-void applyCommand(World& world, const Command& command, float stepSeconds, KinematicMoves& moves, Reply* reply,
+void applyCommand(World& world, const Command& command, CommandTargets targets, Reply* reply,
                   std::vector<std::string>& errors);
 
 /// True for commands that add, remove or teleport bodies, after which snapshots must be rewritten in full.

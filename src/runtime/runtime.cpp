@@ -14,6 +14,7 @@
 #include "rubble/limits.h"
 #include "rubble/world.h"
 #include "runtime/input_queue.h"
+#include "runtime/runtime_characters.h"
 #include "runtime/snapshot.h"
 #include "runtime/snapshot_buffer.h"
 #include "runtime/step_clock.h"
@@ -77,6 +78,7 @@ struct Runtime::Impl {
     std::uint64_t layoutVersion = 1;
     std::vector<detail::PendingCommand> applying;
     detail::KinematicMoves kinematicMoves;
+    detail::RuntimeCharacters characters;
     std::vector<RecordedInput> newlyRecorded;
     std::vector<std::string> newErrors;
     double simTime = 0;
@@ -162,12 +164,14 @@ struct Runtime::Impl {
         const std::uint64_t step = world.stepCount();
         for (detail::PendingCommand& c : commands) {
             if (settings.recordInputs) newlyRecorded.push_back({step, c.command});
-            detail::applyCommand(world, c.command, static_cast<float>(clock.stepSeconds()), kinematicMoves, &c.reply,
+            detail::applyCommand(world, c.command,
+                                 {static_cast<float>(clock.stepSeconds()), kinematicMoves, characters}, &c.reply,
                                  newErrors);
             if (detail::changesLayout(c.command)) ++layoutVersion;
         }
         commands.clear();
         kinematicMoves.beforeStep(world, static_cast<float>(clock.stepSeconds()), newErrors);
+        characters.update(static_cast<float>(clock.stepSeconds()));
         if (!newlyRecorded.empty() || !newErrors.empty()) {
             std::lock_guard lock(outputMutex);
             recording.insert(recording.end(), newlyRecorded.begin(), newlyRecorded.end());
@@ -178,6 +182,7 @@ struct Runtime::Impl {
         const double dt = clock.stepSeconds();
         world.step(static_cast<float>(dt));
         kinematicMoves.afterStep(world);
+        characters.publish();
         keepEvents();
         simTime += dt;
         stats.steps.fetch_add(1, std::memory_order_relaxed);
@@ -448,6 +453,26 @@ std::vector<RecordedInput> Runtime::takeRecording() {
     out.swap(impl_->recording);
     return out;
 }
+
+CharacterId Runtime::addCharacter(Vec3 feet, const CharacterSettings& settings) {
+    Impl& r = *impl_;
+    if (!r.worldIsFree())
+        fail("Runtime::addCharacter", "the physics thread is stepping the world; pause or stop it first");
+    ++r.layoutVersion;  // its body is new
+    const CharacterId id = r.characters.add(r.world, feet, settings);
+    r.characters.publish();
+    return id;
+}
+
+void Runtime::removeCharacter(CharacterId id) {
+    Impl& r = *impl_;
+    if (!r.worldIsFree())
+        fail("Runtime::removeCharacter", "the physics thread is stepping the world; pause or stop it first");
+    ++r.layoutVersion;
+    r.characters.remove(id);
+}
+
+std::optional<CharacterState> Runtime::character(CharacterId id) const { return impl_->characters.state(id); }
 
 std::vector<StepEvents> Runtime::takeEvents() {
     std::lock_guard lock(impl_->outputMutex);

@@ -172,6 +172,42 @@ TEST(Runtime, KinematicMovesAndEventsRecordedOnALiveRunReplayToTheSameStateAndEv
     }
 }
 
+TEST(Runtime, CharacterWalkedThroughTheQueueReplaysToTheSameStateAndPlace) {
+    RuntimeSettings settings;
+    settings.rate = 240;
+    settings.recordInputs = true;
+    Runtime live(test::boxesOnFloor(2, 1), settings);
+    const CharacterId hero = live.addCharacter({-3, 0.02f, -3});
+    live.start();
+    // A game's input: walk, turn, jump, stop, at frame times the physics thread does not share.
+    live.submit(WalkCharacterCommand{hero, {2, 0, 0}});
+    std::this_thread::sleep_for(100ms);
+    live.submit(WalkCharacterCommand{hero, {0, 0, 2}, 4.0f});
+    std::this_thread::sleep_for(100ms);
+    live.submit(WalkCharacterCommand{hero, {}});
+    std::this_thread::sleep_for(1200ms);  // a jump at 4 m/s lasts 0.8 s
+    live.stop();
+    const std::vector<RecordedInput> inputs = live.takeRecording();
+    ASSERT_EQ(inputs.size(), 3u);
+    const CharacterState end = *live.character(hero);
+    EXPECT_TRUE(end.grounded);
+    EXPECT_GT(end.feet.x, -3 + 2 * 0.05f);
+    EXPECT_GT(end.feet.z, -3 + 2 * 0.05f);
+    EXPECT_NEAR(live.world().position(end.body).x, end.feet.x, 1e-4f);
+
+    RuntimeSettings replaySettings = settings;
+    replaySettings.recordInputs = false;
+    Runtime replayed(test::boxesOnFloor(2, 1, 1), replaySettings);
+    const CharacterId again = replayed.addCharacter({-3, 0.02f, -3});
+    replayed.replay(inputs, live.world().stepCount());
+    EXPECT_EQ(replayed.world().stateHash(), live.world().stateHash());
+    EXPECT_EQ(replayed.character(again)->feet, end.feet);
+    EXPECT_NE(test::errorOf([&] {
+                  live.submit(WalkCharacterCommand{hero, {NAN, 0, 0}});
+              }).find("velocity"),
+              std::string::npos);
+}
+
 TEST(Runtime, ReplayRefusesInputsOutOfStepOrder) {
     Runtime runtime(test::boxesOnFloor(1, 1));
     const BodyId box = runtime.world().bodies()[1];
