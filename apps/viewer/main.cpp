@@ -1,4 +1,4 @@
-// rubble-viewer: opens a scene (or the marble demo) in a window, or renders it headless into a PNG.
+// rubble-viewer: opens a scene (or a demo: marble, character) in a window, or renders it headless into a PNG.
 
 #include <cstdio>
 #include <exception>
@@ -13,17 +13,19 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: rubble-viewer [SCENE.json | --demo marble] [options]\n"
+    "usage: rubble-viewer [SCENE.json | --demo marble | --demo character] [options]\n"
     "\n"
     "  SCENE.json         scene file (default: the standard scene S1, scenes/s1_pyramid.json)\n"
     "  --demo marble      the marble demo: steer a ball through a maze with the arrow keys\n"
+    "  --demo character   the character demo: walk a course of corridor, stairs, ramp and lift with\n"
+    "                     the arrows or WASD (space jumps), collecting coins\n"
     "  --rate HZ          physics steps per second (default 120)\n"
     "  --threads T        physics worker threads (default: the scene's setting; 0 = all cores)\n"
     "  --size WxH         window or screenshot size in pixels (default 1280x720)\n"
     "  --frames N         headless: render N frames, physics stepped 1/60 s per frame on this thread\n"
     "  --screenshot FILE  headless: write the last frame as a PNG (needs --frames)\n"
     "  --overlay          headless: draw the overlay into the screenshot too (its numbers vary from run to run)\n"
-    "  --autopilot        marble: the ball finds its way through the maze by itself\n"
+    "  --autopilot        demos: the marble finds its way through the maze, the character walks the course\n"
     "  --layers LIST      debug layers shown at the start, comma-separated: contacts, aabbs, islands, sleeping,\n"
     "                     cells (broad-phase grid cells and static tree), joints\n"
     "                     (default: sleeping)\n";
@@ -55,8 +57,9 @@ rubble::viewer::ViewerOptions parseOptions(int argc, char** argv) {
             std::exit(0);
         } else if (a == "--demo") {
             const std::string_view name = value();
-            if (name != "marble") usageError("--demo knows 'marble', not '" + std::string(name) + "'");
-            o.marble = true;
+            if (name != "marble" && name != "character")
+                usageError("--demo knows 'marble' and 'character', not '" + std::string(name) + "'");
+            (name == "marble" ? o.marble : o.character) = true;
         } else if (a == "--rate")
             o.rate = static_cast<double>(parseNumber(a, value(), 1, 10000));
         else if (a == "--threads")
@@ -91,10 +94,11 @@ rubble::viewer::ViewerOptions parseOptions(int argc, char** argv) {
             usageError(*error);
         }
     }
-    if (o.marble && !o.scene.empty()) usageError("give a scene or --demo marble, not both");
+    if ((o.marble || o.character) && !o.scene.empty()) usageError("give a scene or a demo, not both");
+    if (o.marble && o.character) usageError("give one demo");
     if (!o.screenshot.empty() && o.frames == 0) usageError("--screenshot needs --frames N (the headless mode)");
-    if (o.autopilot && !o.marble) usageError("--autopilot is for --demo marble");
-    if (!o.marble && o.scene.empty()) o.scene = defaultScene();
+    if (o.autopilot && !o.marble && !o.character) usageError("--autopilot is for the demos");
+    if (!o.marble && !o.character && o.scene.empty()) o.scene = defaultScene();
     // Headless screenshots leave the overlay out unless asked: its timings would make them differ run to run.
     if (o.frames > 0) o.overlay = overlayFlag;
     return o;

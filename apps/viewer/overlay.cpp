@@ -68,6 +68,9 @@ void drawOverlay(const OverlayInfo& info, DebugLayers& layers) {
     ImGui::Text("camera: %s", info.followCamera ? "follow" : "orbit");
     if (info.marble)
         ImGui::Text("marble: autopilot %s%s", info.autopilot ? "on" : "off", info.atGoal ? "  -- GOAL reached!" : "");
+    if (info.character)
+        ImGui::Text("character: autopilot %s, %d coins%s", info.autopilot ? "on" : "off", info.coins,
+                    info.atEnd ? "  -- END reached!" : "");
     if (info.selected) {
         const SelectedBody& b = *info.selected;
         ImGui::Separator();
@@ -83,7 +86,8 @@ void drawOverlay(const OverlayInfo& info, DebugLayers& layers) {
             "click: select body   shift+drag: pull selected body\n"
             "space: pause   N: single step   F: shoot ball   B: spawn boxes\n"
             "C: orbit / follow camera   H: hide overlay   Esc: quit\n"
-            "marble: arrows steer   P: autopilot   R: restart ball");
+            "marble: arrows steer   P: autopilot   R: restart ball\n"
+            "character: arrows/WASD walk   space: jump   tab: pause   P: autopilot");
     }
     ImGui::End();
 }

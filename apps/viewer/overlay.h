@@ -39,6 +39,9 @@ struct OverlayInfo {
     bool marble = false;
     bool autopilot = false;
     bool atGoal = false;
+    bool character = false;  ///< the character demo
+    int coins = 0;
+    bool atEnd = false;
     std::size_t instances = 0, triangles = 0, lines = 0;
     int drawCalls = 0;
     std::optional<SelectedBody> selected;

@@ -1,5 +1,5 @@
-// The viewer application (see viewer_app.h): window and context, the Runtime, input, cameras, picking, the marble
-// demo's steering, and the frame loop, interactive or headless.
+// The viewer application (see viewer_app.h): window and context, the Runtime, input, cameras, picking, the demos'
+// steering, and the frame loop, interactive or headless.
 #include "viewer_app.h"
 
 #define GLFW_INCLUDE_NONE
@@ -20,6 +20,7 @@
 #include <unordered_set>
 
 #include "camera.h"
+#include "character_demo.h"
 #include "gl_util.h"
 #include "marble_demo.h"
 #include "overlay.h"
@@ -99,6 +100,7 @@ private:
     void pressed(int key);
     void updateCamera(const RenderFrame& frame, float dt);
     void steerMarble(const RenderFrame& frame, float dt);
+    void steerCharacter(float dt);
     void finishPick(const RenderFrame& frame);
     void updateSelection(const RenderFrame& frame);
     void applyDebugLayers();
@@ -129,6 +131,11 @@ private:
     bool showOverlay_ = true;
 
     ShapeId ballShape_, boxShape_;
+    std::optional<CharacterDemo> characterDemo_;
+    CharacterId hero_;
+    BodyId heroBody_;
+    bool jumpRequested_ = false;
+    bool heroAtEnd_ = false;
     std::optional<MarbleDemo> marble_;
     VelocityEstimate marbleVelocity_;
     bool marbleAtGoal_ = false;
@@ -226,6 +233,11 @@ void Viewer::loadWorld() {
         marble_.emplace();
         marble_->build(*world);
         title_ = "Rubble viewer - marble demo";
+    } else if (options_.character) {
+        world.emplace(CharacterDemo::makeWorld());
+        characterDemo_.emplace();
+        characterDemo_->build(*world);
+        title_ = "Rubble viewer - character demo";
     } else {
         Scene scene = loadScene(options_.scene);
         if (options_.threads >= 0) scene.settings.threads = options_.threads;
@@ -251,6 +263,22 @@ void Viewer::loadWorld() {
     RuntimeSettings settings;
     settings.rate = options_.rate;
     runtime_ = std::make_unique<Runtime>(std::move(*world), settings);
+    if (characterDemo_) {
+        hero_ = runtime_->addCharacter(characterDemo_->start);
+        heroBody_ = runtime_->character(hero_)->body;
+        World& w = runtime_->world();
+        const ShapeId capsule = w.bodyShape(heroBody_);
+        library_.add(capsule.index, w.shapeGeometry(capsule));
+        followMode_ = true;
+        selected_ = heroBody_;
+        // From above and behind, so that the corridor's walls do not hide the character.
+        camera_.pitch = 1.0f;
+        camera_.yaw = 1.2f;
+        camera_.distance = 12.0f;
+        follow_.deadZone = 0.8f;
+        follow_.reset(w.position(heroBody_));
+        camera_.target = follow_.lookAt;
+    }
 }
 
 void Viewer::applyDebugLayers() {
@@ -290,6 +318,12 @@ void Viewer::pressed(int key) {
             glfwSetWindowShouldClose(window_, GLFW_TRUE);
             break;
         case GLFW_KEY_SPACE:
+            if (characterDemo_) {  // the character jumps; Tab pauses
+                jumpRequested_ = true;
+                break;
+            }
+            [[fallthrough]];
+        case GLFW_KEY_TAB:
             if (runtime_->paused())
                 runtime_->resume();
             else
@@ -327,7 +361,7 @@ void Viewer::pressed(int key) {
             showOverlay_ = !showOverlay_;
             break;
         case GLFW_KEY_P:
-            if (marble_) options_.autopilot = !options_.autopilot;
+            if (marble_ || characterDemo_) options_.autopilot = !options_.autopilot;
             break;
         case GLFW_KEY_R:
             if (marble_) {
@@ -459,6 +493,27 @@ void Viewer::steerMarble(const RenderFrame& frame, float dt) {
     if (length(force) > 0 && !runtime_->paused()) runtime_->submit(ApplyImpulseCommand{marble_->ball, force * dt});
 }
 
+void Viewer::steerCharacter(float dt) {
+    const std::optional<CharacterState> hero = runtime_->character(hero_);
+    if (!hero || runtime_->paused()) return;
+    CharacterDemo& demo = *characterDemo_;
+    for (const BodyId coin : demo.collect(runtime_->takeEvents(), heroBody_)) runtime_->submit(RemoveBodyCommand{coin});
+    if (demo.atEnd(hero->feet)) heroAtEnd_ = true;
+    Vec3 walk;
+    if (options_.autopilot) {
+        walk = demo.autopilotWalk(*hero);
+    } else if (window_ && options_.frames == 0) {
+        auto down = [&](int a, int b) {
+            return glfwGetKey(window_, a) == GLFW_PRESS || glfwGetKey(window_, b) == GLFW_PRESS ? 1.0f : 0.0f;
+        };
+        walk = demo.walkVelocity(down(GLFW_KEY_RIGHT, GLFW_KEY_D) - down(GLFW_KEY_LEFT, GLFW_KEY_A),
+                                 down(GLFW_KEY_UP, GLFW_KEY_W) - down(GLFW_KEY_DOWN, GLFW_KEY_S), camera_.forward());
+    }
+    runtime_->submit(WalkCharacterCommand{hero_, walk, jumpRequested_ ? CharacterDemo::kJumpSpeed : 0.0f});
+    jumpRequested_ = false;
+    runtime_->submit(demo.moveLift(*hero, dt));
+}
+
 void Viewer::updateCamera(const RenderFrame& frame, float dt) {
     if (!followMode_) return;
     const std::optional<Vec3> p = bodyPosition(frame, selected_);
@@ -475,11 +530,20 @@ void Viewer::renderFrame(const RenderFrame& frame, int width, int height) {
     const std::uint32_t beacon = marble_ ? marble_->beacon.index : ~0u;
     const std::uint32_t floor = marble_ ? marble_->floorBody.index : ~0u;
     const std::uint32_t walls = marble_ ? marble_->wallBody.index : ~0u;
+    const std::uint32_t hero = characterDemo_ ? heroBody_.index : ~0u;
+    const auto isCoin = [&](std::uint32_t slot) {
+        if (!characterDemo_) return false;
+        for (const BodyId coin : characterDemo_->coins)
+            if (coin.index == slot) return true;
+        return false;
+    };
     collectInstances(
         frame, library_,
         [&](std::uint32_t slot, ShapeType type) -> Rgba {
             const std::uint8_t flags = frame.flags[slot];
             if (slot == beacon) return {0.2f, 0.95f, 0.3f, 1};
+            if (slot == hero) return {0.98f, 0.82f, 0.12f, 1};
+            if (isCoin(slot)) return {1.0f, 0.62f, 0.05f, 1};
             if (slot == floor) return {0.45f, 0.62f, 0.85f, 0.85f};
             if (slot == walls) return {0.22f, 0.27f, 0.45f, 1};
             if (flags & kSnapshotStatic) return {0.56f, 0.57f, 0.58f, 0.88f};  // checkered ground
@@ -543,6 +607,7 @@ int Viewer::run() {
         viewerLines_.lines.clear();
         updateSelection(frame);
         if (marble_) steerMarble(frame, dt);
+        if (characterDemo_) steerCharacter(dt);
         updateCamera(frame, dt);
         for (const std::string& error : runtime_->takeInputErrors()) std::fprintf(stderr, "input: %s\n", error.c_str());
 
@@ -569,6 +634,9 @@ int Viewer::run() {
             info.marble = marble_.has_value();
             info.autopilot = options_.autopilot;
             info.atGoal = marbleAtGoal_;
+            info.character = characterDemo_.has_value();
+            info.coins = characterDemo_ ? characterDemo_->coinsCollected : 0;
+            info.atEnd = heroAtEnd_;
             info.instances = renderer_->stats().instances;
             info.triangles = renderer_->stats().triangles;
             info.lines = renderer_->stats().lines;
@@ -588,7 +656,11 @@ int Viewer::run() {
             std::printf("screenshot %s (%dx%d) after %d frames, physics step %llu%s\n", options_.screenshot.c_str(),
                         options_.width, options_.height, options_.frames,
                         static_cast<unsigned long long>(runtime_->stats().steps),
-                        marble_ ? (marbleAtGoal_ ? ", marble at the goal" : ", marble on its way") : "");
+                        marble_          ? (marbleAtGoal_ ? ", marble at the goal" : ", marble on its way")
+                        : characterDemo_ ? (heroAtEnd_ ? ", character at the end" : ", character on its way")
+                                         : "");
+            if (characterDemo_)
+                std::printf("coins %d of %zu\n", characterDemo_->coinsCollected, characterDemo_->coins.size());
         }
     } else {
         runtime_->stop();

@@ -6,8 +6,9 @@
 namespace rubble::viewer {
 
 struct ViewerOptions {
-    std::string scene;    ///< scene file; empty with `marble`
-    bool marble = false;  ///< the marble demo instead of a scene
+    std::string scene;       ///< scene file; empty with `marble`
+    bool marble = false;     ///< the marble demo instead of a scene
+    bool character = false;  ///< the character demo instead of a scene
     /// Headless: render this many frames, stepping physics by a fixed 1/60 s per frame on this thread (so the
     /// result does not depend on the machine's speed), then write `screenshot`. 0: interactive.
     int frames = 0;
@@ -16,7 +17,8 @@ struct ViewerOptions {
     double rate = 120;  ///< physics steps per second
     int threads = -1;   ///< worker threads (-1: the scene's setting)
     bool overlay = true;
-    bool autopilot = false;  ///< marble: the ball follows the way through the maze by itself
+    /// Demos: the marble follows the way through the maze, the character walks the course, by themselves.
+    bool autopilot = false;
     /// Debug layers to start with: any of "contacts", "aabbs", "islands", "sleeping", "cells", "joints"
     /// (comma-separated).
     std::string layers;

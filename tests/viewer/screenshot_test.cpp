@@ -1,6 +1,7 @@
-// Headless screenshots under Xvfb with Mesa's software renderer: the viewer renders S1 and the marble demo into PNGs,
+// Headless screenshots under Xvfb with Mesa's software renderer: the viewer renders S1 and the two demos into PNGs,
 // which are read back (stb_image, independent of the viewer's writer) and checked for content: most pixels differ
-// from the clear colour, and the scene's own colours are there (the boxes' orange, the marble's red).
+// from the clear colour, and the scene's own colours are there (the boxes' orange, the marble's red, the character's
+// yellow).
 // Without xvfb-run (and no display) the tests are skipped, saying so.
 #include <gtest/gtest.h>
 #include <stb_image.h>
@@ -110,6 +111,22 @@ TEST(ViewerScreenshot, MarbleDemoShowsTheBallInTheMaze) {
     // The maze's blues fill most of the rest.
     const double blue = fraction(image, [](int r, int g, int b) { return b > r + 40 && !isClear(r, g, b); });
     EXPECT_GT(blue, 0.3);
+    std::filesystem::remove(png);
+}
+
+TEST(ViewerScreenshot, CharacterDemoShowsTheCharacterOnTheCourse) {
+    const std::string png = temporaryPng("rubble-viewer-character");
+    std::string skip;
+    if (!renderHeadless("--demo character --autopilot --frames 240 --size 320x180", png, skip)) GTEST_SKIP() << skip;
+    const Image image = load(png);
+    ASSERT_EQ(image.width, 320);
+    // The follow camera keeps the character in view, from above and behind: its yellow (0.98, 0.82, 0.12), red and
+    // green high, blue low. Its yellow pixels measured 174 (0.3 %) after 240 frames, in the corridor; half of that is
+    // asked for; with the character out of view, or hidden by the corridor's walls, there are none.
+    const double yellow = fraction(image, [](int r, int g, int b) { return r > 120 && g > 90 && b < r / 3; });
+    EXPECT_GT(yellow, 0.0015) << "the character is not in the picture";
+    const double drawn = fraction(image, [](int r, int g, int b) { return !isClear(r, g, b); });
+    EXPECT_GT(drawn, 0.4);
     std::filesystem::remove(png);
 }
 
