@@ -19,9 +19,14 @@ bool listens(const BodyStorage& storage, const ContactPair& pair) {
            0;
 }
 
-Vec3 velocityAt(const MovingBodies& m, std::uint32_t i, Vec3 point) {
-    const Vec3 arm = point - Vec3{m.px[i], m.py[i], m.pz[i]};
-    return Vec3{m.vx[i], m.vy[i], m.vz[i]} + cross(Vec3{m.wx[i], m.wy[i], m.wz[i]}, arm);
+/// A moving body's centre of mass and velocities (zero for a static body).
+struct BodyMotion {
+    Vec3 center, linear, angular;
+    Vec3 velocityAt(Vec3 point) const { return linear + cross(angular, point - center); }
+};
+
+BodyMotion motionOf(const MovingBodies& m, std::uint32_t i) {
+    return {{m.px[i], m.py[i], m.pz[i]}, {m.vx[i], m.vy[i], m.vz[i]}, {m.wx[i], m.wy[i], m.wz[i]}};
 }
 
 /// The pair of a manifold as the contact cache keyed it (slots and generations survive removals between steps,
@@ -54,38 +59,57 @@ void selectManifolds(std::size_t count, TaskPool& pool, std::vector<std::vector<
 void ContactEventStage::listen(const Contacts& contacts, const BodyStorage& storage, TaskPool& pool) {
     selectManifolds(contacts.manifolds.size(), pool, chunkLists_, listened_,
                     [&](std::size_t k) { return listens(storage, contacts.pairs[k]); });
-    const MovingBodies& m = storage.moving;
     approach_.assign(listened_.size() * kMaxManifoldPoints, 0.0f);
     impulses_.assign(listened_.size() * kMaxManifoldPoints, 0.0f);
-    lanes_.assign(listened_.size(), ~0u);
-    for (std::size_t j = 0; j < listened_.size(); ++j) {
-        const ContactPair& pair = contacts.pairs[listened_[j]];
-        const Manifold& manifold = contacts.manifolds[listened_[j]];
-        for (int i = 0; i < manifold.pointCount; ++i) {
-            const Vec3 p = manifold.points[i].position;
-            const Vec3 va = pair.aStatic ? Vec3{} : velocityAt(m, pair.a, p);
-            const Vec3 vb = pair.bStatic ? Vec3{} : velocityAt(m, pair.b, p);
-            approach_[j * kMaxManifoldPoints + static_cast<std::size_t>(i)] = -dot(vb - va, manifold.normal);
+    lanes_.clear();
+    const MovingBodies& m = storage.moving;
+    pool.forChunks(listened_.size(), kManifoldChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t j = begin; j < end; ++j) {
+            const ContactPair& pair = contacts.pairs[listened_[j]];
+            const Manifold& manifold = contacts.manifolds[listened_[j]];
+            // Each body's motion is read once per manifold: its rows are scattered, its points are not.
+            const BodyMotion a = pair.aStatic ? BodyMotion{} : motionOf(m, pair.a);
+            const BodyMotion b = pair.bStatic ? BodyMotion{} : motionOf(m, pair.b);
+            for (int i = 0; i < manifold.pointCount; ++i) {
+                const Vec3 p = manifold.points[i].position;
+                approach_[j * kMaxManifoldPoints + static_cast<std::size_t>(i)] =
+                    -dot(b.velocityAt(p) - a.velocityAt(p), manifold.normal);
+            }
         }
-    }
+    });
 }
 
-void ContactEventStage::findLanes(const ContactSolver* solver) {
+void ContactEventStage::findLanes(const ContactSolver* solver, const Contacts& contacts) {
+    lanes_.clear();
     if (solver == nullptr || listened_.empty()) return;
-    solver->lanesOf(listened_, lanes_);
+    listenedOf_.assign(contacts.manifolds.size(), ~0u);
+    for (std::size_t j = 0; j < listened_.size(); ++j) listenedOf_[listened_[j]] = static_cast<std::uint32_t>(j);
+    const std::span<const std::uint32_t> manifoldOfLane = solver->manifoldOfLane();
+    for (std::uint32_t lane = 0; lane < manifoldOfLane.size(); ++lane) {
+        const std::uint32_t k = manifoldOfLane[lane];
+        if (k >= listenedOf_.size() || listenedOf_[k] == ~0u) continue;
+        lanes_.push_back({lane, listenedOf_[k], contacts.manifolds[k].pointCount});
+    }
+    laneImpulses_.assign(lanes_.size() * kMaxManifoldPoints, 0.0f);
 }
 
-void ContactEventStage::addSubstepImpulses(const ContactSolver& solver, const Contacts& contacts) {
-    for (std::size_t j = 0; j < listened_.size(); ++j) {
-        if (lanes_[j] == ~0u) continue;
-        const int points = contacts.manifolds[listened_[j]].pointCount;
-        for (int i = 0; i < points; ++i)
-            impulses_[j * kMaxManifoldPoints + static_cast<std::size_t>(i)] += solver.normalImpulse(lanes_[j], i);
-    }
+void ContactEventStage::addSubstepImpulses(const ContactSolver& solver, TaskPool& pool) {
+    // Read and written in lane order, both in memory order; report() hands the sums to their manifolds once.
+    pool.forChunks(lanes_.size(), kManifoldChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        for (std::size_t e = begin; e < end; ++e) {
+            const Lane& l = lanes_[e];
+            float* sum = &laneImpulses_[e * kMaxManifoldPoints];
+            for (int i = 0; i < l.points; ++i) sum[i] += solver.normalImpulse(l.lane, i);
+        }
+    });
 }
 
 void ContactEventStage::report(const Contacts* contacts, const ContactCache& cache, const BodyStorage& storage,
                                float touchSlop, float hitSpeed, TaskPool& pool, ContactEvents& out) {
+    for (std::size_t e = 0; e < lanes_.size(); ++e)
+        for (std::size_t i = 0; i < kMaxManifoldPoints; ++i)
+            impulses_[std::size_t{lanes_[e].listened} * kMaxManifoldPoints + i] =
+                laneImpulses_[e * kMaxManifoldPoints + i];
     const auto pushed = [&](std::size_t j) {
         for (std::size_t i = 0; i < kMaxManifoldPoints; ++i)
             if (impulses_[j * kMaxManifoldPoints + i] > 0) return true;
@@ -100,14 +124,25 @@ void ContactEventStage::report(const Contacts* contacts, const ContactCache& cac
                 if (manifold.points[i].depth >= -touchSlop) return true;
             return false;
         });
-        bool flipped = false;
-        for (const std::uint32_t k : touchingManifolds_) now_.push_back(pairOf(cache.currentKey(k), flipped));
+        // Pairs by slots alone: within a step a slot holds one body, whose generation the storage still has.
+        const auto slotsOf = [&](std::uint32_t k) {
+            const std::uint64_t slots = cache.currentKey(k).slots;
+            const std::uint64_t a = slots >> 32, b = slots & 0xFFFFFFFFu;
+            return a < b ? a << 32 | b : b << 32 | a;
+        };
+        touchingSlots_.clear();
+        for (const std::uint32_t k : touchingManifolds_) touchingSlots_.push_back(slotsOf(k));
         // A speculative contact that pushed met within the step: a ball that falls onto a floor and bounces off it
         // between two steps' contacts touched it.
         for (std::size_t j = 0; j < listened_.size(); ++j)
-            if (pushed(j)) now_.push_back(pairOf(cache.currentKey(listened_[j]), flipped));
-        std::sort(now_.begin(), now_.end());
-        now_.erase(std::unique(now_.begin(), now_.end()), now_.end());
+            if (pushed(j)) touchingSlots_.push_back(slotsOf(listened_[j]));
+        radixSort(touchingSlots_.data(), touchingSlots_.size(), sortScratch_, pool);
+        touchingSlots_.erase(std::unique(touchingSlots_.begin(), touchingSlots_.end()), touchingSlots_.end());
+        for (const std::uint64_t slots : touchingSlots_) {
+            const BodyId a = storage.idAt(static_cast<std::uint32_t>(slots >> 32));
+            const BodyId b = storage.idAt(static_cast<std::uint32_t>(slots));
+            now_.push_back(eventPair(a, b));
+        }
     }
     touching_.update(
         storage, now_,

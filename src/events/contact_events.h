@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "broadphase/radix_sort.h"
 #include "contacts/contact_cache.h"
 #include "contacts/contacts.h"
 #include "events/event_pairs.h"
@@ -27,20 +28,31 @@ public:
     /// speed now.
     void listen(const Contacts& contacts, const BodyStorage& storage, TaskPool& pool);
     /// After the solver's prepare(): where the listened manifolds sit in the solver (none without a solve).
-    void findLanes(const ContactSolver* solver);
-    /// At the end of every substep: the listened manifolds' impulses of that substep.
-    void addSubstepImpulses(const ContactSolver& solver, const Contacts& contacts);
+    void findLanes(const ContactSolver* solver, const Contacts& contacts);
+    /// At the end of every substep: the listened manifolds' impulses of that substep (in lane order, so that the
+    /// solver's batches are read in memory order; the chunks in parallel).
+    void addSubstepImpulses(const ContactSolver& solver, TaskPool& pool);
     /// After the step: begin and end from the step's manifolds (`contacts`, null when the collision stages did not
     /// run), whose bodies `cache` names; hits from what listen() and the substeps gathered. Appends to `out`.
     void report(const Contacts* contacts, const ContactCache& cache, const BodyStorage& storage, float touchSlop,
                 float hitSpeed, TaskPool& pool, ContactEvents& out);
 
 private:
-    std::vector<std::uint32_t> listened_;  ///< manifold indices, ascending
-    std::vector<float> approach_;          ///< kMaxManifoldPoints per listened manifold, m/s
-    std::vector<std::uint32_t> lanes_;     ///< per listened manifold: its solver lane, or ~0u
-    std::vector<float> impulses_;          ///< kMaxManifoldPoints per listened manifold: summed over the substeps
+    /// A listened manifold's place in the solver.
+    struct Lane {
+        std::uint32_t lane = 0;      ///< batch * kBatchLanes + lane
+        std::uint32_t listened = 0;  ///< index into listened_
+        std::int32_t points = 0;
+    };
+    std::vector<std::uint32_t> listened_;    ///< manifold indices, ascending
+    std::vector<float> approach_;            ///< kMaxManifoldPoints per listened manifold, m/s
+    std::vector<float> impulses_;            ///< kMaxManifoldPoints per listened manifold: summed over the substeps
+    std::vector<float> laneImpulses_;        ///< the same sums as the substeps add them, per entry of lanes_
+    std::vector<std::uint32_t> listenedOf_;  ///< per manifold of the step: its index in listened_, or ~0u
+    std::vector<Lane> lanes_;                ///< the listened manifolds the solver has, in lane order
     std::vector<std::uint32_t> touchingManifolds_;
+    std::vector<std::uint64_t> touchingSlots_;  ///< slot << 32 | slot of each touching pair, lower first
+    RadixSortScratch sortScratch_;
     std::vector<std::vector<std::uint32_t>> chunkLists_;
     std::vector<EventPair> now_;
     struct Hit {

@@ -728,14 +728,4 @@ void ContactSolver::storeImpulses(std::vector<PointImpulse>& impulses, TaskPool&
                    });
 }
 
-void ContactSolver::lanesOf(std::span<const std::uint32_t> manifolds, std::vector<std::uint32_t>& lanes) const {
-    // One pass over the lanes, each looked up among the (few, ascending) manifolds asked about.
-    lanes.assign(manifolds.size(), ~0u);
-    for (std::uint32_t lane = 0; lane < manifoldOfLane_.size(); ++lane) {
-        const std::uint32_t k = manifoldOfLane_[lane];
-        const auto at = std::lower_bound(manifolds.begin(), manifolds.end(), k);
-        if (at != manifolds.end() && *at == k) lanes[static_cast<std::size_t>(at - manifolds.begin())] = lane;
-    }
-}
-
 }  // namespace rubble::detail

@@ -166,9 +166,9 @@ public:
     /// The final accumulated impulses, in manifold order, for the contact cache (in parallel over the batches).
     void storeImpulses(std::vector<PointImpulse>& impulses, TaskPool& pool);
 
-    /// For the contact events (src/events/): the lane (batch * kBatchLanes + lane) of each of `manifolds` (ascending
-    /// indices into the contacts of the last prepare()), or ~0u for a manifold the solve leaves out.
-    void lanesOf(std::span<const std::uint32_t> manifolds, std::vector<std::uint32_t>& lanes) const;
+    /// For the contact events (src/events/): the manifold (index into the contacts of the last prepare()) in each
+    /// lane (batch * kBatchLanes + lane), or ~0u for an empty lane.
+    std::span<const std::uint32_t> manifoldOfLane() const { return manifoldOfLane_; }
     /// Normal impulse point `point` of the manifold in `lane` has accumulated in the current substep (its whole push
     /// in the substep, the warm start included), once the substep's passes ran.
     float normalImpulse(std::uint32_t lane, int point) const {

@@ -190,7 +190,7 @@ void findContacts(World::Impl& w, StepContext& step) {
     step.solve = !w.contactSolver.empty() || step.joints;
     if (step.contactEvents) {
         const auto timer = step.time(Stage::Events);
-        w.contactEventStage.findLanes(w.contactSolver.empty() ? nullptr : &w.contactSolver);
+        w.contactEventStage.findLanes(w.contactSolver.empty() ? nullptr : &w.contactSolver, w.contacts);
     }
 }
 
@@ -214,7 +214,7 @@ void relaxAndBounce(World::Impl& w, StepContext& step) {
     detail::relaxAndBounce(solver, step);
     if (step.contactEvents && !w.contactSolver.empty()) {
         const auto timer = step.time(Stage::Events);
-        w.contactEventStage.addSubstepImpulses(w.contactSolver, w.contacts);
+        w.contactEventStage.addSubstepImpulses(w.contactSolver, step.pool);
     }
 }
 
