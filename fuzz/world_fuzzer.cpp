@@ -157,6 +157,20 @@ ShapeDef shapeDef(FuzzInput& in) {
     }
 }
 
+/// A step's events as text, to compare the twins' (the same on any thread count).
+std::string describeEvents(const World& w) {
+    std::string out;
+    const auto pair = [&](char kind, BodyId a, BodyId b) {
+        out += kind + std::to_string(a.index) + "," + std::to_string(b.index) + " ";
+    };
+    for (const ContactBeginEvent& e : w.contactEvents().begins) pair('b', e.a, e.b);
+    for (const ContactEndEvent& e : w.contactEvents().ends) pair('e', e.a, e.b);
+    for (const ContactHitEvent& e : w.contactEvents().hits) pair('h', e.a, e.b);
+    for (const SensorBeginEvent& e : w.sensorEvents().begins) pair('s', e.sensor, e.visitor);
+    for (const SensorEndEvent& e : w.sensorEvents().ends) pair('t', e.sensor, e.visitor);
+    return out;
+}
+
 template <class Handle>
 Handle pick(FuzzInput& in, const std::vector<Handle>& handles) {
     if (handles.empty() || (in.byte() & 31) == 0) return Handle{in.byte(), in.byte()};  // null, stale or unknown
@@ -201,6 +215,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                 def.gravityScale = in.mostlyIn(-1, 2);
                 def.allowSleep = in.flag();
                 def.bullet = in.flag();
+                // Derived from what was drawn, not drawn anew: the corpus and the findings keep their meaning.
+                def.contactEvents = def.allowSleep != def.bullet;
+                def.sensor = def.filter.category == 8 && def.bullet;
+                def.contactResponse = !(def.filter.category == 4 && def.bullet);
                 if (auto id = twins.both("createBody", [&](World& w, int) { return w.createBody(def); }))
                     bodies.push_back(*id);
                 break;
@@ -228,7 +246,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                     default:
                         break;
                 }
-                twins.both("step", [&](World& w, int) { return (w.step(dt), 0); });
+                std::string events[2];
+                twins.both("step", [&](World& w, int k) { return (w.step(dt), events[k] = describeEvents(w), 0); });
+                check(events[0] == events[1], "a step's events differ on 1 and 2 threads");
                 ++steps;
                 break;
             }
@@ -266,15 +286,27 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                 const Vec3 v = vec(in, 20);
                 const Quat q = rotation(in);
                 const std::uint32_t kind = in.below(3);
-                twins.both("pose or velocity", [&](World& w, int) {
-                    if (kind == 0)
+                std::string contacts[2];
+                // A kinematic body is moved to the pose instead of set there (every third time), and every call also
+                // turns the body's events on or off and lists its contacts, with no input drawn for them: the corpus
+                // and the findings keep their meaning.
+                twins.both("pose, velocity, kinematic move, events or contacts", [&](World& w, int k) {
+                    if (kind == 0 && w.bodyType(id) == BodyType::Kinematic && q.w > 0.5f)
+                        w.moveKinematic(id, v, q, 1.0f / 60);
+                    else if (kind == 0)
                         w.setTransform(id, v, q);
                     else if (kind == 1)
                         w.setLinearVelocity(id, v);
                     else
                         w.setAngularVelocity(id, v);
+                    w.setContactEvents(id, q.x > 0);
+                    std::vector<BodyContact> found;
+                    w.contactsOf(id, found);
+                    for (const BodyContact& c : found)
+                        contacts[k] += std::to_string(c.other.index) + ":" + std::to_string(c.pointCount) + " ";
                     return 0;
                 });
+                check(contacts[0] == contacts[1], "contactsOf answered differently on 1 and 2 threads");
                 break;
             }
             case 6: {

@@ -144,14 +144,7 @@ void ContactEventStage::report(const Contacts* contacts, const ContactCache& cac
             now_.push_back(eventPair(a, b));
         }
     }
-    touching_.update(
-        storage, now_,
-        [&](const EventPair& p) {
-            out.begins.push_back({p.first(), p.second()});
-        },
-        [&](const EventPair& p) {
-            out.ends.push_back({p.first(), p.second()});
-        });
+    touching_.update(storage, now_, out.begins, out.ends);
 
     hits_.clear();
     for (std::size_t j = 0; j < listened_.size() && contacts != nullptr; ++j) {

@@ -65,6 +65,19 @@ public:
             std::inplace_merge(now.begin(), now.begin() + static_cast<std::ptrdiff_t>(found), now.end());
         held_.swap(now);
     }
+    /// update() with the begins and ends appended to `begins` and `ends` as {first, second} events.
+    template <class BeginEvent, class EndEvent>
+    void update(const BodyStorage& storage, std::vector<EventPair>& now, std::vector<BeginEvent>& begins,
+                std::vector<EndEvent>& ends) {
+        update(
+            storage, now,
+            [&](const EventPair& p) {
+                begins.push_back({p.first(), p.second()});
+            },
+            [&](const EventPair& p) {
+                ends.push_back({p.first(), p.second()});
+            });
+    }
     bool empty() const { return held_.empty(); }
     const std::vector<EventPair>& pairs() const { return held_; }
 

@@ -56,14 +56,7 @@ void SensorEventStage::report(const BodyStorage& storage, SensorEvents& out) {
     // A sensor overlaps a mesh in several triangles, a compound in several children: one pair each.
     std::sort(now_.begin(), now_.end());
     now_.erase(std::unique(now_.begin(), now_.end()), now_.end());
-    overlaps_.update(
-        storage, now_,
-        [&](const EventPair& p) {
-            out.begins.push_back({p.first(), p.second()});
-        },
-        [&](const EventPair& p) {
-            out.ends.push_back({p.first(), p.second()});
-        });
+    overlaps_.update(storage, now_, out.begins, out.ends);
     now_.clear();
 }
 

@@ -24,6 +24,14 @@ float angleBetween(Quat a, Quat b) {
     return 2 * std::acos(std::min(1.0f, d));
 }
 
+void addGround(World& world) {
+    BodyDef ground;
+    ground.type = BodyType::Static;
+    ground.shape = world.createShape(BoxDef{{50, 0.5f, 50}});
+    ground.position = {0, -0.5f, 0};
+    world.createBody(ground);
+}
+
 BodyId addPlatform(World& world, Vec3 position) {
     BodyDef def;
     def.type = BodyType::Kinematic;
@@ -52,11 +60,7 @@ TEST(KinematicMover, ReachesTheTargetPoseInOneStep) {
 
 TEST(KinematicMover, PlatformCarriesWhatStandsOnIt) {
     World world;
-    BodyDef ground;
-    ground.type = BodyType::Static;
-    ground.shape = world.createShape(BoxDef{{50, 0.5f, 50}});
-    ground.position = {0, -0.5f, 0};
-    world.createBody(ground);
+    addGround(world);
     const BodyId platform = addPlatform(world, {0, 1.0f, 0});
     BodyDef box;
     box.shape = world.createShape(BoxDef{{0.3f, 0.3f, 0.3f}});
@@ -83,11 +87,7 @@ TEST(KinematicMover, PlatformCarriesWhatStandsOnIt) {
 
 TEST(KinematicMover, DoorPushesADynamicBoxAside) {
     World world;
-    BodyDef ground;
-    ground.type = BodyType::Static;
-    ground.shape = world.createShape(BoxDef{{50, 0.5f, 50}});
-    ground.position = {0, -0.5f, 0};
-    world.createBody(ground);
+    addGround(world);
     BodyDef door;
     door.type = BodyType::Kinematic;
     door.shape = world.createShape(BoxDef{{0.1f, 1, 1}});
