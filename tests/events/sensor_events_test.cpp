@@ -158,6 +158,51 @@ TEST(Sensors, MovingSensorSeesStaticBodiesAndBodiesWithoutResponse) {
     EXPECT_EQ(world.sensorEvents().begins[0].visitor, visitor);
 }
 
+TEST(Sensors, DynamicSensorFallsThroughWhatItReportsAndPushesNothing) {
+    // A falling dynamic sensor passes through a stack of boxes (pushing none: they keep their places bit for bit
+    // against the same stack without it) and reports each box as it passes, then the floor, which it falls through.
+    const auto run = [](bool withSensor, std::vector<BodyId>& seen) {
+        World world;
+        addFloor(world);
+        std::vector<BodyId> boxes;
+        for (int k = 0; k < 3; ++k) {
+            BodyDef box;
+            box.shape = world.createShape(BoxDef{{0.5f, 0.25f, 0.5f}});
+            box.position = {0, 0.25f + 0.5f * static_cast<float>(k), 0};
+            boxes.push_back(world.createBody(box));
+        }
+        if (withSensor) {
+            BodyDef probe;
+            probe.shape = world.createShape(SphereDef{0.2f});
+            probe.position = {0, 3, 0};
+            probe.sensor = true;
+            const BodyId sensor = world.createBody(probe);
+            for (int i = 0; i < 90; ++i) {
+                world.step(kDt);
+                for (const SensorBeginEvent& e : world.sensorEvents().begins) {
+                    EXPECT_EQ(e.sensor, sensor);
+                    seen.push_back(e.visitor);
+                }
+            }
+            EXPECT_LT(world.position(sensor).y, -1.0f);  // through the floor
+        } else {
+            for (int i = 0; i < 90; ++i) world.step(kDt);
+        }
+        std::vector<Vec3> places;
+        for (const BodyId b : boxes) places.push_back(world.position(b));
+        return places;
+    };
+    std::vector<BodyId> seen, none;
+    const std::vector<Vec3> with = run(true, seen), without = run(false, none);
+    EXPECT_EQ(with, without);
+    // The top box, the middle one, the bottom one, the floor: slots 3, 2, 1, 0.
+    ASSERT_EQ(seen.size(), 4u);
+    EXPECT_EQ(seen[0].index, 3u);
+    EXPECT_EQ(seen[1].index, 2u);
+    EXPECT_EQ(seen[2].index, 1u);
+    EXPECT_EQ(seen[3].index, 0u);
+}
+
 TEST(Sensors, QueriesAndContinuousCollisionPassThroughSensors) {
     WorldSettings settings;
     settings.effects = EffectSet::defaults().with(Effect::ContinuousCollision);
