@@ -56,26 +56,38 @@ void selectManifolds(std::size_t count, TaskPool& pool, std::vector<std::vector<
 
 }  // namespace
 
-void ContactEventStage::listen(const Contacts& contacts, const BodyStorage& storage, TaskPool& pool) {
-    selectManifolds(contacts.manifolds.size(), pool, chunkLists_, listened_,
-                    [&](std::size_t k) { return listens(storage, contacts.pairs[k]); });
+void ContactEventStage::listen(const Contacts& contacts, const BodyStorage& storage, float touchSlop, float hitSpeed,
+                               TaskPool& pool) {
+    const MovingBodies& m = storage.moving;
+    // The approach speed of each point of manifold k, before the solve; each body's motion is read once per
+    // manifold (its rows are scattered, the points are not).
+    const auto approaches = [&](std::size_t k, float* out) {
+        const ContactPair& pair = contacts.pairs[k];
+        const Manifold& manifold = contacts.manifolds[k];
+        const BodyMotion a = pair.aStatic ? BodyMotion{} : motionOf(m, pair.a);
+        const BodyMotion b = pair.bStatic ? BodyMotion{} : motionOf(m, pair.b);
+        for (int i = 0; i < manifold.pointCount; ++i) {
+            const Vec3 p = manifold.points[i].position;
+            out[i] = -dot(b.velocityAt(p) - a.velocityAt(p), manifold.normal);
+        }
+    };
+    // Only the manifolds whose push the report needs are followed through the substeps: those that may hit, and
+    // those not touching yet (they touch if they push). A resting contact is neither: it touches by its depth.
+    selectManifolds(contacts.manifolds.size(), pool, chunkLists_, listened_, [&](std::size_t k) {
+        if (!listens(storage, contacts.pairs[k])) return false;
+        const Manifold& manifold = contacts.manifolds[k];
+        bool touching = false;
+        for (int i = 0; i < manifold.pointCount; ++i) touching = touching || manifold.points[i].depth >= -touchSlop;
+        if (!touching) return true;
+        float speeds[kMaxManifoldPoints];
+        approaches(k, speeds);
+        return *std::max_element(speeds, speeds + manifold.pointCount) >= hitSpeed;
+    });
     approach_.assign(listened_.size() * kMaxManifoldPoints, 0.0f);
     impulses_.assign(listened_.size() * kMaxManifoldPoints, 0.0f);
     lanes_.clear();
-    const MovingBodies& m = storage.moving;
     pool.forChunks(listened_.size(), kManifoldChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-        for (std::size_t j = begin; j < end; ++j) {
-            const ContactPair& pair = contacts.pairs[listened_[j]];
-            const Manifold& manifold = contacts.manifolds[listened_[j]];
-            // Each body's motion is read once per manifold: its rows are scattered, its points are not.
-            const BodyMotion a = pair.aStatic ? BodyMotion{} : motionOf(m, pair.a);
-            const BodyMotion b = pair.bStatic ? BodyMotion{} : motionOf(m, pair.b);
-            for (int i = 0; i < manifold.pointCount; ++i) {
-                const Vec3 p = manifold.points[i].position;
-                approach_[j * kMaxManifoldPoints + static_cast<std::size_t>(i)] =
-                    -dot(b.velocityAt(p) - a.velocityAt(p), manifold.normal);
-            }
-        }
+        for (std::size_t j = begin; j < end; ++j) approaches(listened_[j], &approach_[j * kMaxManifoldPoints]);
     });
 }
 

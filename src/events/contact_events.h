@@ -3,7 +3,9 @@
 // Only manifolds with a body that asks (kFlagContactEvents) are looked at, so a world pays per listened contact, not
 // per contact. Touch is read from the step's final manifolds; a hit needs the approach speed before the solve (taken
 // in the first substep, right after the narrow phase) and the impulse the contact applied over the whole step, which
-// the solver keeps only per substep: the listened manifolds' impulses are summed at the end of every substep.
+// the solver keeps only per substep: the impulses of the manifolds that may hit or that do not touch yet (they
+// touch if they push) are summed at the end of every substep. A resting contact is neither, so a settled pile that
+// listens pays for its contacts once a step, not once a substep.
 #include <cstdint>
 #include <vector>
 
@@ -24,9 +26,10 @@ public:
     /// False when no body asks for events and no pair is held: then none of the calls below need run.
     bool active(std::uint32_t listeningBodies) const { return listeningBodies > 0 || !touching_.empty(); }
 
-    /// First substep, after the narrow phase: the manifolds a listening body takes part in, and each point's approach
+    /// First substep, after the narrow phase: the manifolds of a listening body whose push the report will need
+    /// (those that approach at `hitSpeed` or more, and those not yet within `touchSlop`), and each point's approach
     /// speed now.
-    void listen(const Contacts& contacts, const BodyStorage& storage, TaskPool& pool);
+    void listen(const Contacts& contacts, const BodyStorage& storage, float touchSlop, float hitSpeed, TaskPool& pool);
     /// After the solver's prepare(): where the listened manifolds sit in the solver (none without a solve).
     void findLanes(const ContactSolver* solver, const Contacts& contacts);
     /// At the end of every substep: the listened manifolds' impulses of that substep (in lane order, so that the
@@ -44,7 +47,7 @@ private:
         std::uint32_t listened = 0;  ///< index into listened_
         std::int32_t points = 0;
     };
-    std::vector<std::uint32_t> listened_;    ///< manifold indices, ascending
+    std::vector<std::uint32_t> listened_;    ///< manifolds followed through the substeps (see listen()), ascending
     std::vector<float> approach_;            ///< kMaxManifoldPoints per listened manifold, m/s
     std::vector<float> impulses_;            ///< kMaxManifoldPoints per listened manifold: summed over the substeps
     std::vector<float> laneImpulses_;        ///< the same sums as the substeps add them, per entry of lanes_

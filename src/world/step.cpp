@@ -158,7 +158,9 @@ void findContacts(World::Impl& w, StepContext& step) {
     if (step.sensors || step.contactEvents) {
         const auto timer = step.time(Stage::Events);
         if (step.sensors) profile.sensorPairs = w.sensorEventStage.separate(w.contacts, w.bodies);
-        if (step.contactEvents) w.contactEventStage.listen(w.contacts, w.bodies, step.pool);
+        if (step.contactEvents)
+            w.contactEventStage.listen(w.contacts, w.bodies, w.settings.solver.linearSlop, w.settings.hitEventSpeed,
+                                       step.pool);
     }
     profile.manifolds = static_cast<std::uint32_t>(w.contacts.manifolds.size());
     profile.contactPoints = w.contacts.pointCount;
