@@ -33,8 +33,9 @@ struct ContactHitEvent {
     Vec3 point;           ///< world point of the fastest approaching contact point
     Vec3 normal;          ///< unit, from a towards b
     float approachSpeed;  ///< normal speed of b towards a at that point before the step's solve, m/s (> 0)
-    /// Normal impulse the contact applied over the whole step (every substep, every point, every part of the pair:
-    /// compound children, mesh triangles), N s; b received it along the normal, a the opposite.
+    /// Normal impulse the contact applied over the whole step (every substep, every point, and every part of the pair
+    /// that met in the step: compound children, mesh triangles; a part already resting in contact and approaching
+    /// slower than hitEventSpeed is not counted), N s; b received it along the normal, a the opposite.
     float impulse;
 };
 

@@ -190,6 +190,7 @@ void ContactEventStage::report(const Contacts* contacts, const ContactCache& cac
         j = k;
     }
     listened_.clear();
+    lanes_.clear();
 }
 
 }  // namespace rubble::detail
