@@ -28,6 +28,9 @@ struct ContactKey {
     std::uint64_t slots = 0;        ///< slot of A << 32 | slot of B (one slot map covers moving and static bodies)
     std::uint64_t generations = 0;  ///< so that a body reusing a slot does not inherit another's contacts
     std::uint64_t parts = 0;        ///< triangle << 32 | child of A << 16 | child of B
+    /// The two bodies, A and B as the kernel saw them.
+    BodyId bodyA() const { return {static_cast<unsigned>(slots >> 32), static_cast<unsigned>(generations >> 32)}; }
+    BodyId bodyB() const { return {static_cast<unsigned>(slots), static_cast<unsigned>(generations)}; }
     friend bool operator==(const ContactKey& x, const ContactKey& y) {
         return x.slots == y.slots && x.generations == y.generations && x.parts == y.parts;
     }

@@ -10,13 +10,9 @@ namespace {
 
 constexpr std::size_t kManifoldChunk = 4096;
 
-std::uint8_t flagsOf(const BodyStorage& storage, std::uint32_t dense, bool isStatic) {
-    return isStatic ? storage.statics.flags[dense] : storage.moving.flags[dense];
-}
-
 bool listens(const BodyStorage& storage, const ContactPair& pair) {
-    return ((flagsOf(storage, pair.a, pair.aStatic) | flagsOf(storage, pair.b, pair.bStatic)) & kFlagContactEvents) !=
-           0;
+    return ((bodyFlags(storage, pair.a, pair.aStatic) | bodyFlags(storage, pair.b, pair.bStatic)) &
+            kFlagContactEvents) != 0;
 }
 
 /// A moving body's centre of mass and velocities (zero for a static body).
@@ -32,10 +28,8 @@ BodyMotion motionOf(const MovingBodies& m, std::uint32_t i) {
 /// The pair of a manifold as the contact cache keyed it (slots and generations survive removals between steps,
 /// which dense indices do not), lower slot first; `flipped` when the kernel's A is the second body.
 EventPair pairOf(const ContactKey& key, bool& flipped) {
-    const BodyId a{static_cast<unsigned>(key.slots >> 32), static_cast<unsigned>(key.generations >> 32)};
-    const BodyId b{static_cast<unsigned>(key.slots), static_cast<unsigned>(key.generations)};
-    flipped = b.index < a.index;
-    return unorderedEventPair(a, b);
+    flipped = key.bodyB().index < key.bodyA().index;
+    return unorderedEventPair(key.bodyA(), key.bodyB());
 }
 
 /// Indices of the manifolds `keep` accepts, ascending, found in parallel chunks and joined in chunk order.
@@ -138,9 +132,8 @@ void ContactEventStage::report(const Contacts* contacts, const ContactCache& cac
         });
         // Pairs by slots alone: within a step a slot holds one body, whose generation the storage still has.
         const auto slotsOf = [&](std::uint32_t k) {
-            const std::uint64_t slots = cache.currentKey(k).slots;
-            const std::uint64_t a = slots >> 32, b = slots & 0xFFFFFFFFu;
-            return a < b ? a << 32 | b : b << 32 | a;
+            bool flipped = false;
+            return pairOf(cache.currentKey(k), flipped).slots;
         };
         touchingSlots_.clear();
         for (const std::uint32_t k : touchingManifolds_) touchingSlots_.push_back(slotsOf(k));

@@ -15,10 +15,8 @@ struct EventPair {
     std::uint64_t generations = 0;  ///< in the same order
     friend auto operator<=>(const EventPair&, const EventPair&) = default;
 
-    std::uint32_t firstSlot() const { return static_cast<std::uint32_t>(slots >> 32); }
-    std::uint32_t secondSlot() const { return static_cast<std::uint32_t>(slots); }
-    BodyId first() const { return {firstSlot(), static_cast<unsigned>(generations >> 32)}; }
-    BodyId second() const { return {secondSlot(), static_cast<unsigned>(generations)}; }
+    BodyId first() const { return {static_cast<unsigned>(slots >> 32), static_cast<unsigned>(generations >> 32)}; }
+    BodyId second() const { return {static_cast<unsigned>(slots), static_cast<unsigned>(generations)}; }
 };
 
 inline EventPair eventPair(BodyId first, BodyId second) {
@@ -28,6 +26,11 @@ inline EventPair eventPair(BodyId first, BodyId second) {
 /// The pair with the lower slot first (contacts have no sides).
 inline EventPair unorderedEventPair(BodyId x, BodyId y) {
     return x.index < y.index ? eventPair(x, y) : eventPair(y, x);
+}
+
+/// The flags of the body at `dense` in its set (kFlagContactEvents, kFlagSensor, kFlagNoResponse for either set).
+inline std::uint8_t bodyFlags(const BodyStorage& storage, std::uint32_t dense, bool isStatic) {
+    return isStatic ? storage.statics.flags[dense] : storage.moving.flags[dense];
 }
 
 /// A body of a pair is still there and stays where it is without being stepped: static, or asleep. A pair the step
@@ -79,7 +82,6 @@ public:
             });
     }
     bool empty() const { return held_.empty(); }
-    const std::vector<EventPair>& pairs() const { return held_; }
 
 private:
     std::vector<EventPair> held_;

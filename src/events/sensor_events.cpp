@@ -6,10 +6,6 @@ namespace rubble::detail {
 
 namespace {
 
-std::uint8_t flagsOf(const BodyStorage& storage, std::uint32_t dense, bool isStatic) {
-    return isStatic ? storage.statics.flags[dense] : storage.moving.flags[dense];
-}
-
 BodyId idOf(const BodyStorage& storage, std::uint32_t dense, bool isStatic) {
     return storage.idAt(isStatic ? storage.statics.slot[dense] : storage.moving.slot[dense]);
 }
@@ -28,8 +24,8 @@ std::uint32_t SensorEventStage::separate(Contacts& contacts, const BodyStorage& 
     std::uint32_t points = 0;
     for (std::size_t k = 0; k < n; ++k) {
         const ContactPair& pair = contacts.pairs[k];
-        const std::uint8_t flagsA = flagsOf(storage, pair.a, pair.aStatic);
-        const std::uint8_t flagsB = flagsOf(storage, pair.b, pair.bStatic);
+        const std::uint8_t flagsA = bodyFlags(storage, pair.a, pair.aStatic);
+        const std::uint8_t flagsB = bodyFlags(storage, pair.b, pair.bStatic);
         if (!((flagsA | flagsB) & (kFlagSensor | kFlagNoResponse))) {
             if (kept != k) {
                 contacts.pairs[kept] = pair;

@@ -17,8 +17,7 @@ std::uint32_t partOrNone(std::uint64_t part, std::uint64_t none) {
 /// The manifold of `key` seen from body `id`, appended to `out`; nothing when `id` is not one of its bodies.
 void appendContact(BodyId id, const detail::ContactKey& key, const detail::Manifold& manifold,
                    const detail::PointImpulse* impulses, std::vector<BodyContact>& out) {
-    const BodyId a{static_cast<unsigned>(key.slots >> 32), static_cast<unsigned>(key.generations >> 32)};
-    const BodyId b{static_cast<unsigned>(key.slots), static_cast<unsigned>(key.generations)};
+    const BodyId a = key.bodyA(), b = key.bodyB();
     if (a != id && b != id) return;
     const bool asA = a == id;
     BodyContact& c = out.emplace_back();
@@ -86,8 +85,7 @@ std::size_t World::contactsOf(BodyId id, std::vector<BodyContact>& out) const {
     if (w.contactsOfLastStep && !asleep) {
         for (std::size_t k = 0; k < w.contacts.manifolds.size(); ++k) {
             const detail::ContactKey& key = w.contactCache.currentKey(k);
-            const auto slotA = static_cast<std::uint32_t>(key.slots >> 32),
-                       slotB = static_cast<std::uint32_t>(key.slots);
+            const std::uint32_t slotA = key.bodyA().index, slotB = key.bodyB().index;
             if ((slotA != id.index && slotB != id.index) || asleepNow(slotA == id.index ? slotB : slotA)) continue;
             appendContact(id, key, w.contacts.manifolds[k], &w.impulses[k * detail::kMaxManifoldPoints], out);
         }
