@@ -1,7 +1,6 @@
-// A chunk's candidates into jobs: each candidate either gets its manifolds of an earlier step again (when its kernels
-// cost more than a lookup and its bodies have hardly moved: manifold_reuse.h) or becomes jobs to compute, one per
-// pair of shapes (a compound's children are split) or one per body's run of mesh triangles, with its reuse entry
-// pending until they are computed.
+// A chunk's candidates into jobs: each candidate either gets its manifolds of an earlier step again (when its bodies
+// have hardly moved: manifold_reuse.h) or becomes jobs to compute, one per pair of shapes (a compound's children are
+// split) or one per body's run of mesh triangles, with its reuse entry pending until they are computed.
 #if defined(__GNUC__) && !defined(__clang__)
 // GCC 12's SLP vectoriser fuses the alternating a*b - c / a*b + c lanes of the quaternion product (poseChange) into
 // vfmsubadd even under -ffp-contract=off: the reuse test would then round differently from one build level to
@@ -51,13 +50,12 @@ public:
     }
 
 private:
-    /// A candidate whose kernels cost more than a lookup: its manifolds again if its bodies have hardly moved
-    /// (true: its jobs are made), else an entry that takes this step's manifolds (pending until they are made).
+    /// A candidate: its manifolds again if its bodies have hardly moved (true: no jobs are made), else an entry that
+    /// takes this step's manifolds (pending until they are made).
     bool reuseOrKeep(ManifoldReuse::Section section, std::uint32_t first, std::uint32_t second, bool secondStatic) {
         const MovingBodies& m = storage_.moving;
         const StaticBodies& st = storage_.statics;
         const std::uint32_t shape1 = m.shape[first], shape2 = secondStatic ? st.shape[second] : m.shape[second];
-        if (!worthReusing(tables_.kind[shape1], tables_.kind[shape2])) return false;
         // Written in place (a whole Entry built on the stack and copied in stalls on store forwarding).
         const auto entryIndex = static_cast<std::uint32_t>(cache_->entries.size());
         ManifoldReuse::Entry& now = cache_->entries.emplace_back();
@@ -98,7 +96,8 @@ private:
             const float moved = relativeDisplacement(change1, change2, tables_.reach[shape1]);
             // Points the old margin left out were further apart than it, and can have closed by `moved`
             // since: the surfaces must not be able to close the rest in this step.
-            if (moved <= params_.reuseDistance && now.margin - params_.margin + moved < then.margin) {
+            if (moved <= params_.reuseDistance && now.margin - params_.margin + moved < then.margin &&
+                turnedLittle(change1) && turnedLittle(change2)) {
                 // Kept as computed then, under this step's order.
                 const std::uint64_t order = now.order;
                 const auto firstStored = static_cast<std::uint32_t>(cache_->stored.size());

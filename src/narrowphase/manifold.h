@@ -17,9 +17,13 @@ struct ContactPoint {
 };
 
 /// Contact between bodies A and B: a shared normal and up to four points.
+/// Each point anchors the contact on both bodies: on B at `position`, on A at `position + shiftA`. A manifold the
+/// narrow phase computes has one world point for both (shiftA zero); a recycled one (manifold_reuse.h) keeps each
+/// anchor at its offset from its own body's centre, so the two anchors part by the bodies' relative motion since.
 struct Manifold {
     Vec3 normal;  ///< unit, pointing from A to B
     int pointCount = 0;
+    Vec3 shiftA;  ///< A's anchors less B's (the points), world
     ContactPoint points[kMaxManifoldPoints];
 };
 

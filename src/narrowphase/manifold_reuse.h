@@ -1,18 +1,17 @@
 #pragma once
-// Manifold reuse: a pair whose bodies have hardly moved relative to each other since its manifolds were computed gets
-// those manifolds again, carried along with its bodies, instead of running its kernels. Jolt's body pair cache does
-// the same for pairs that moved less than 1 mm and turned less than 2 degrees; here the test is one bound on how far
-// any point of the first body's shape has moved relative to the second body, so a long body that turns a little is
-// not taken for still. The carried manifolds keep their feature ids (the contact cache warm-starts them exactly), their
-// points ride on body B (where the kernels put them), their normal turns with B, and each depth follows the relative
-// motion of the bodies at that point along the normal: exact to first order in the motion, so a resting pair's depth
-// does not freeze while the solver moves its bodies.
+// Manifold reuse (contact recycling): a pair whose bodies have hardly moved relative to each other since its
+// manifolds were computed gets those manifolds again instead of running its kernels, as Box3D recycles its contacts
+// (within 5 cm of relative motion) and Jolt's body pair cache reuses its (1 mm, 2 degrees). The test is one bound on
+// how far any point of the first body's shape has moved relative to the second body, so a long body that turns a
+// little is not taken for still, and neither body may have turned more than 2 degrees. The recycled manifolds
+// keep their feature ids (the contact cache warm-starts them exactly), their normal and their anchors' offsets from
+// the bodies' centres, and each depth follows the relative motion of the bodies at that point along the normal
+// (moveManifold), so a resting pair's depth does not freeze while the solver moves its bodies.
 //
-// The stage keeps, per parallel chunk of candidates, an entry for every candidate whose kernels are dearer than the
-// lookup (not the sphere, capsule and box pairs that run in SIMD lanes, capsule-box aside): the bodies' poses and the
-// speculative margin when its manifolds were computed, and those manifolds. A reused entry is copied forward unchanged,
-// so the motion is always measured from the step that computed it and the manifolds are computed again once it adds up
-// to the tolerance.
+// The stage keeps, per parallel chunk of candidates, an entry for every candidate: the bodies' poses and the
+// speculative margin when its manifolds were computed, and those manifolds. A reused entry is copied forward
+// unchanged, so the motion is always measured from the step that computed it and the manifolds are computed again
+// once it adds up to the tolerance.
 #include <cstdint>
 #include <vector>
 
@@ -50,25 +49,42 @@ inline float relativeDisplacement(const PoseChange& a, const PoseChange& b, floa
     return length(atPoint) + 2.0f * reachA * length(Vec3{between.x, between.y, between.z});
 }
 
-/// A manifold computed between A and B, moved with them. Each side is followed at its core (a sphere's centre, a
-/// capsule's segment; a polytope's surface), `radiusA` and `radiusB` being the roundings: a spinning sphere's
-/// surface does not move, though its material points do. The point (on B's surface) is carried with B's core, the
-/// normal turns with B, and the depth is the rounding less the cores' separation along the new normal, which is
-/// exact when the pair moves as one rigid body and right to first order otherwise. Everything is formed relative to
-/// the bodies' own points, so that bodies far from the origin keep their depths' precision.
+/// Neither body may have turned more than 2 degrees (as Jolt's body pair cache allows) since a manifold was computed
+/// for it to be recycled: its normal is kept in the world, so a pair that turns together (a box on a tilting
+/// platform) must be computed again. The turn's vector part is the sine of half its angle: this is sin(1 degree).
+inline constexpr float kRecycleHalfTurnSine = 0.0174524f;
+
+inline bool turnedLittle(const PoseChange& c) {
+    return c.turn.x * c.turn.x + c.turn.y * c.turn.y + c.turn.z * c.turn.z <=
+           kRecycleHalfTurnSine * kRecycleHalfTurnSine;
+}
+
+/// A manifold computed between A and B, recycled as Box3D recycles its contacts: the contact keeps the shape it had
+/// when it was computed and only its depths follow the bodies. The normal stays as it was in the world; each anchor
+/// keeps its offset from its own body's centre (B's at the point, A's at the point plus shiftA, their centres'
+/// relative translation since); each depth is the roundings less the separation along the kept normal of the two
+/// sides' cores (a sphere's centre, a capsule's segment, a polytope's surface point) carried with their bodies:
+/// exact for a pair that only translates, right to first order otherwise. Everything is formed relative to the
+/// bodies' own points, so that bodies far from the origin keep their depths' precision.
+///
+/// Why the normal and the anchors' offsets are kept: soft contacts sag under load, so a stack leans a little, and a
+/// normal that turns with the lower body, or loads that move with the bodies' turn, push a leaning stack sideways
+/// and lean it further. S5's wall, one cube deep, tipped out of its plane after about 6 s when every step's contacts
+/// followed the bodies; with its contacts kept as they were computed it stands (docs/solver_defaults.md).
 inline void moveManifold(const Manifold& then, const PoseChange& a, const PoseChange& b, float radiusA, float radiusB,
                          Manifold& now) {
     const Vec3 n = then.normal;
-    now.normal = rotate(b.turn, n);
+    now.normal = n;
     now.pointCount = then.pointCount;
+    now.shiftA = (a.to - a.from) - (b.to - b.from);
     const Vec3 between = a.to - b.to;
     for (int i = 0; i < then.pointCount; ++i) {
         const ContactPoint& p = then.points[i];
         // B lies along +n from the point; A's surface point is `depth` further on, its core `radiusA` back.
         const Vec3 coreA = (p.position - a.from) + n * (p.depth - radiusA);
         const Vec3 coreB = rotate(b.turn, (p.position - b.from) + n * radiusB);
-        now.points[i].position = b.to + coreB - now.normal * radiusB;
-        now.points[i].depth = dot(between + rotate(a.turn, coreA) - coreB, now.normal) + radiusA + radiusB;
+        now.points[i].position = b.to + (p.position - b.from);
+        now.points[i].depth = dot(between + rotate(a.turn, coreA) - coreB, n) + radiusA + radiusB;
         now.points[i].feature = p.feature;
     }
 }

@@ -120,6 +120,8 @@ void NarrowPhaseStage::runChunk(NarrowChunk& chunk, Scratch& scratch, const Body
             }
             continue;
         }
+        // A computed manifold anchors both bodies at its points (its slot may hold an older, recycled one).
+        if (job.triangles == 0) chunk.manifolds[j].shiftA = Vec3{};
         const PairKernelRow& kernel = kernelRow(job.kernel);
         if (kernel.batched != BatchedKernel::Count) {
             scratch.batch.jobs[static_cast<int>(kernel.batched)].push_back(j);

@@ -87,12 +87,4 @@ extern const PairKernelRow kPairKernelRows[static_cast<int>(PairKernel::Count)];
 
 inline const PairKernelRow& kernelRow(PairKernel kernel) { return kPairKernelRows[static_cast<int>(kernel)]; }
 
-/// Whether the manifolds of two bodies (kinds in any order) are worth keeping for reuse: not those of the kernels
-/// that run in SIMD lanes, which cost less than a lookup and a copy. A compound's children may be anything: worth it.
-inline bool worthReusing(ShapeKind first, ShapeKind second) {
-    if (first == ShapeKind::Compound || second == ShapeKind::Compound) return true;
-    const PairKernel kernel = second < first ? pairKernel(second, first) : pairKernel(first, second);
-    return kernelRow(kernel).batched == BatchedKernel::Count;
-}
-
 }  // namespace rubble::detail

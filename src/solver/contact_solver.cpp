@@ -355,8 +355,8 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
             for (int i = 0; i < mf.pointCount; ++i) {
                 const ContactPoint& cp = mf.points[i];
                 ContactBatch::Point& pt = b.points[i];
-                // The point lies on B's surface; A's anchor is the same world point.
-                const Vec3 rA = cp.position - A.p, rB = cp.position - B.p;
+                // B's anchor is the point; A's is the same world point but in a recycled manifold.
+                const Vec3 rA = cp.position + mf.shiftA - A.p, rB = cp.position - B.p;
                 pt.rAx[lane] = rA.x, pt.rAy[lane] = rA.y, pt.rAz[lane] = rA.z;
                 pt.rBx[lane] = rB.x, pt.rBy[lane] = rB.y, pt.rBz[lane] = rB.z;
                 pt.separation[lane] = -cp.depth;

@@ -36,7 +36,8 @@ Manifold twoPointManifold() {
 
 TEST(ManifoldReuse, DepthGrowsByTheApproachAlongTheNormal) {
     // A (above, normal pointing down to B) moves 3 mm down and 1 mm sideways while B stays: every depth grows by
-    // exactly 3 mm (the sideways part is tangent), points and normal stay, feature ids stay.
+    // exactly 3 mm (the sideways part is tangent), B's anchors (the points) and the normal stay, A's anchors move with
+    // A, feature ids stay.
     const BodyPose a0{{0, 0.5f, 0}, {}}, b0{{0, -0.5f, 0}, {}};
     const BodyPose a1{{0.001f, 0.497f, 0}, {}};
     const Manifold then = twoPointManifold();
@@ -44,6 +45,7 @@ TEST(ManifoldReuse, DepthGrowsByTheApproachAlongTheNormal) {
     moveManifold(then, poseChange(a0, a1), poseChange(b0, b0), 0, 0, now);
     ASSERT_EQ(now.pointCount, 2);
     EXPECT_EQ(now.normal, then.normal);
+    EXPECT_LT(length(now.shiftA - Vec3{0.001f, -0.003f, 0}), 1e-7f);
     for (int i = 0; i < 2; ++i) {
         EXPECT_EQ(now.points[i].position, then.points[i].position);
         EXPECT_NEAR(now.points[i].depth, then.points[i].depth + 0.003f, 1e-7f);
@@ -66,26 +68,45 @@ TEST(ManifoldReuse, ASphereSpinningInPlaceKeepsItsContact) {
     EXPECT_NEAR(now.points[0].depth, 0.01f, 1e-6f);
 }
 
-TEST(ManifoldReuse, APairMovedAsOneRigidBodyKeepsItsDepthsAndTurnsItsPointsAndNormal) {
-    // Both bodies moved by the same rigid motion (turned 0.4 rad about a tilted axis through a far point, then
-    // shifted): the relative displacement is zero, every depth is unchanged, and points and normal are the old ones
-    // under that motion. 1e-5 m: float rounding of coordinates up to 12 m.
+TEST(ManifoldReuse, APairMovedAsOneRigidBodyKeepsItsDepthsNormalAndAnchorOffsets) {
+    // Both bodies moved by the same rigid motion (turned 1.5 degrees about a tilted axis through a far point, then
+    // shifted): the relative displacement is zero and every depth is unchanged but for the kept normal (below). A
+    // recycled contact keeps its normal in the world and each anchor's offset from its own body's centre: B's anchors
+    // move with B's centre, A's with A's (1e-5 m: float rounding of coordinates up to 12 m).
     std::mt19937 rng(3);
-    const Quat turn = Quat::fromAxisAngle({0.3f, 1, -0.2f}, 0.4f);
+    const Quat turn = Quat::fromAxisAngle({0.3f, 1, -0.2f}, 0.026f);
     const Vec3 pivot{10, -2, 5}, shift{0.2f, 0.1f, -0.3f};
     auto moved = [&](Vec3 p) { return pivot + rotate(turn, p - pivot) + shift; };
     const BodyPose a0{{0, 0.5f, 0}, randomRotation(rng)}, b0{{0.2f, -0.5f, 0.1f}, randomRotation(rng)};
     const BodyPose a1{moved(a0.position), turn * a0.rotation}, b1{moved(b0.position), turn * b0.rotation};
     const PoseChange ca = poseChange(a0, a1), cb = poseChange(b0, b1);
     EXPECT_LT(relativeDisplacement(ca, cb, 1.5f), 1e-5f);
+    EXPECT_TRUE(turnedLittle(ca) && turnedLittle(cb));
     const Manifold then = twoPointManifold();
     Manifold now;
     moveManifold(then, ca, cb, 0.1f, 0.2f, now);
-    EXPECT_LT(length(now.normal - rotate(turn, then.normal)), 1e-6f);
+    EXPECT_EQ(now.normal, then.normal);
     for (int i = 0; i < 2; ++i) {
-        EXPECT_LT(length(now.points[i].position - moved(then.points[i].position)), 1e-5f);
-        EXPECT_NEAR(now.points[i].depth, then.points[i].depth, 1e-5f);
+        EXPECT_LT(length((now.points[i].position - b1.position) - (then.points[i].position - b0.position)), 1e-5f);
+        EXPECT_LT(length((now.points[i].position + now.shiftA - a1.position) - (then.points[i].position - a0.position)),
+                  1e-5f);
+        // The kept normal is off the pair's turned one by the normal's tilt t (0.0088 rad: the turn's axis is nearly
+        // the normal), so the cores' separation (0.29 m) measured along it is short by 0.29 (1 - cos t) = 1.1e-5 m.
+        EXPECT_NEAR(now.points[i].depth, then.points[i].depth, 2e-5f);
     }
+}
+
+TEST(ManifoldReuse, OnlyPairsWhoseBodiesTurnedLittleAreRecycled) {
+    // The normal is kept in the world: a body turned by more than 2 degrees, even with its partner (no relative
+    // motion), must have its contact computed again.
+    const BodyPose still{{0, 0, 0}, {}};
+    const auto turnedBy = [&](float angle) {
+        return poseChange(still, BodyPose{{0, 0, 0}, Quat::fromAxisAngle({0, 0, 1}, angle)});
+    };
+    EXPECT_TRUE(turnedLittle(turnedBy(0.0f)));
+    EXPECT_TRUE(turnedLittle(turnedBy(0.034f)));
+    EXPECT_FALSE(turnedLittle(turnedBy(0.036f)));
+    EXPECT_FALSE(turnedLittle(turnedBy(-0.5f)));
 }
 
 TEST(ManifoldReuse, RelativeDisplacementBoundsTheMotionOfEveryPointOfA) {
@@ -164,7 +185,7 @@ struct Pile {
                     const Quat q = Quat::fromAxisAngle(axis, tilt(rng));
                     scene.addMoving(kinds[k++ % 7], {x, floor + 0.39f + spacing * float(layer), z}, q);
                 }
-        // Last, a cube (a hull: box-box pairs are always computed) of its own shape sunk into the top of a body of the
+        // Last, a cube (a hull) of its own shape sunk into the top of a body of the
         // second layer (whose tops are at least 0.18 m above their centres).
         const float x = -5.4f + 7 * spacing, z = -3 + 4 * spacing;
         scene.addMoving(topCube, {x, surface(x, z) + 0.39f + spacing + 0.15f + 0.4f, z}, {});
@@ -218,6 +239,7 @@ void expectMatching(const Contacts& x, const Contacts& y, Check check) {
 void expectSameBits(const Contacts& x, const Contacts& y) {
     expectMatching(x, y, [](const Manifold& a, const Manifold& b, std::size_t k) {
         EXPECT_EQ(std::memcmp(&a.normal, &b.normal, sizeof(Vec3)), 0) << k;
+        EXPECT_EQ(std::memcmp(&a.shiftA, &b.shiftA, sizeof(Vec3)), 0) << k;
         for (int p = 0; p < a.pointCount; ++p)
             EXPECT_EQ(std::memcmp(&a.points[p], &b.points[p], sizeof(ContactPoint)), 0) << k << " " << p;
     });
@@ -245,22 +267,8 @@ TEST(ManifoldReuse, PairsThatDidNotMoveGetTheManifoldsTheyWouldCompute) {
     EXPECT_EQ(reusing.reusedManifolds(), 0u) << "nothing to reuse on the first run";
     ASSERT_GT(first.manifolds.size(), 300u) << "the pile must touch itself and the statics";
     const Contacts again = pile.run(reusing, 0.001f);
-    // Nothing moved, so every manifold of a pair worth reusing is reused: all but those of the pairs of spheres,
-    // capsules and boxes (capsule-box excepted), whose batched kernels cost less than a lookup.
-    const auto batched = [&](std::uint32_t body, bool isStatic) {
-        const StageScene& s = pile.scene;
-        const ShapeKind k = s.shapes[isStatic ? s.storage.statics.shape[body] : s.storage.moving.shape[body]].kind;
-        return k == ShapeKind::Sphere || k == ShapeKind::Capsule || k == ShapeKind::Box ? k : ShapeKind::Compound;
-    };
-    std::uint32_t worth = 0;
-    for (const ContactPair& p : first.pairs) {
-        const ShapeKind a = batched(p.a, p.aStatic), b = batched(p.b, p.bStatic);
-        const bool capsuleBox =
-            (a == ShapeKind::Capsule && b == ShapeKind::Box) || (a == ShapeKind::Box && b == ShapeKind::Capsule);
-        worth += capsuleBox || a == ShapeKind::Compound || b == ShapeKind::Compound ? 1u : 0u;
-    }
-    EXPECT_GT(worth, first.manifolds.size() / 4);
-    EXPECT_EQ(reusing.reusedManifolds(), worth);
+    // Nothing moved, so every manifold is reused, those of every kind of pair.
+    EXPECT_EQ(reusing.reusedManifolds(), first.manifolds.size());
     expectClose(first, again, 1e-6f);
 }
 
@@ -292,13 +300,14 @@ TEST(ManifoldReuse, ReusedManifoldsAgreeWithComputedOnesAfterSmallMotions) {
     //   bring a corner over the next triangle with so small a motion, and a reused manifold cannot know of a new
     //   triangle. Those must be rare (at most 1% of the pairs), and a pair that both fresh answers hold must be
     //   reused;
-    // - normals within 2 mrad (the relative turn, plus a kernel's choice between nearly equal axes);
+    // - normals within 2 mrad (the relative turn, plus a kernel's choice between nearly equal axes), except where
+    //   the kernels chose another face at the new pose (at most 3% of the pairs);
     // - for points with the same feature id, depths within 0.25 mm. The moved depth follows the motion to first order
-    //   at the moved point; a computed point made by clipping slides along its edge instead (the reused one rides
-    //   on B), and where the faces in contact meet at an angle (tilts up to 0.05 rad, the mesh's slope up to 0.15)
-    //   that slide changes its depth by the motion times that angle: up to about half of 0.5 mm;
-    // - positions within 1 cm only: a clipped point on an edge nearly parallel to the side plane that cuts it
-    //   slides many times as far as the bodies move.
+    //   at the moved point; a computed point made by clipping slides along its edge instead (the reused one keeps
+    //   its offset from B's centre), and where the faces in contact meet at an angle (tilts up to 0.05 rad, the
+    //   mesh's slope up to 0.15) that slide changes its depth by the motion times that angle: up to about 0.3 mm;
+    // - positions within 2 cm only: a clipped point on an edge nearly parallel to the side plane that cuts it
+    //   slides many times as far as the bodies move (1.4 cm for a pair of the boxes).
     Pile pile;
     NarrowPhaseStage reusing;
     const Contacts before = pile.run(reusing, 0.01f);
@@ -321,7 +330,7 @@ TEST(ManifoldReuse, ReusedManifoldsAgreeWithComputedOnesAfterSmallMotions) {
     float worstDepth = 0, worstPosition = 0, worstNormal = 0;
     std::map<PairKey, bool> seen, foundBefore;
     for (const ContactPair& p : before.pairs) foundBefore[keyOf(p)] = true;
-    int kernelFlips = 0;
+    int kernelFlips = 0, faceFlips = 0;
     for (std::size_t k = 0; k < reused.pairs.size(); ++k) {
         const PairKey key = keyOf(reused.pairs[k]);
         seen[key] = true;
@@ -334,6 +343,13 @@ TEST(ManifoldReuse, ReusedManifoldsAgreeWithComputedOnesAfterSmallMotions) {
         }
         const Manifold& c = computed.manifolds[it->second];
         ++compared;
+        if (length(r.normal - c.normal) > 2e-3f) {
+            // The kernels chose another face at the moved pose: of two faces of nearly equal separation, A's or B's
+            // (their tilts differ by up to 0.1 rad), or a box's top or side where one box's corner meets another's.
+            // The recycled manifold keeps the face chosen before, which describes the same contact.
+            ++faceFlips;
+            continue;
+        }
         worstNormal = std::max(worstNormal, length(r.normal - c.normal));
         for (int i = 0; i < r.pointCount; ++i) {
             ++points;
@@ -353,15 +369,16 @@ TEST(ManifoldReuse, ReusedManifoldsAgreeWithComputedOnesAfterSmallMotions) {
         ++kernelFlips;
     }
     EXPECT_LE(kernelFlips, compared / 100) << "pairs the kernels find at only one of two poses 0.2 mm apart";
+    EXPECT_LE(faceFlips, compared * 3 / 100) << "pairs the kernels give another face at two poses 0.2 mm apart";
     EXPECT_GT(compared, 300);
     EXPECT_GT(matched, points * 9 / 10) << "feature ids must mostly survive so small a motion";
     EXPECT_LT(worstNormal, 2e-3f);
-    EXPECT_LT(worstDepth, 2.5e-4f);
-    EXPECT_LT(worstPosition, 1e-2f);
+    EXPECT_LT(worstDepth, 3e-4f);
+    EXPECT_LT(worstPosition, 2e-2f);
     std::printf(
         "compared %d manifolds, %d of %d points by feature: worst depth %.3g m, position %.3g m, normal %.3g; %d pairs "
-        "found at one pose only\n",
-        compared, matched, points, worstDepth, worstPosition, worstNormal, kernelFlips);
+        "found at one pose only, %d with another face\n",
+        compared, matched, points, worstDepth, worstPosition, worstNormal, kernelFlips, faceFlips);
 }
 
 TEST(ManifoldReuse, ABodyThatTookAnotherOnesSlotIsComputedAgain) {

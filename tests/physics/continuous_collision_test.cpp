@@ -80,7 +80,7 @@ TEST(ContinuousCollision, FastBallsStayInFrontOfAThinWallAndAOneSidedMeshWall) {
 /// Returns the number of steps at whose end a tip of the rod was beyond the wall's near face by more than its
 /// thickness: a rod 2 m long and 2 cm thick, spinning about its centre, `wallX` in front of a 2 cm wall; at 50 rad/s
 /// its tips sweep 0.83 m of arc a step, through where the wall is.
-int spinningRodThroughWall(bool continuous, float spin, float wallX, std::uint32_t* hits = nullptr) {
+int spinningRodThroughWall(bool continuous, float spin, float wallX) {
     World world = makeWorld(continuous, false);
     addStatic(world, BoxDef{{0.01f, 2, 2}}, {wallX + 0.01f, 0, 0});
     // Along y at the start, so that both tips are in front of the wall.
@@ -89,7 +89,6 @@ int spinningRodThroughWall(bool continuous, float spin, float wallX, std::uint32
     int through = 0;
     for (int step = 0; step < 60; ++step) {
         world.step(kDt);
-        if (hits) *hits += world.lastProfile().ccdHits;
         const Transform t = world.transform(rod);
         for (float end : {-1.0f, 1.0f}) through += apply(t, {end, 0, 0}).x > wallX + 0.02f ? 1 : 0;
     }
@@ -97,14 +96,11 @@ int spinningRodThroughWall(bool continuous, float spin, float wallX, std::uint32
 }
 
 TEST(ContinuousCollision, SpinningRodDoesNotTurnThroughAThinWall) {
-    // At 50 rad/s the tips' speculative contacts already hold them; at 100 rad/s, 0.3 m from the wall, they turn
-    // through it within a step unless swept.
-    EXPECT_GT(spinningRodThroughWall(false, 100, 0.3f), 0) << "the case must tunnel without continuous collision";
-    std::uint32_t hits = 0;
-    EXPECT_EQ(spinningRodThroughWall(true, 100, 0.3f, &hits), 0);
-    EXPECT_GT(hits, 0u) << "the rod was moved back to its time of impact";
-    for (float spin : {50.0f, 100.0f})
-        for (float wallX : {0.3f, 0.6f, 0.9f})
+    // The tips' speculative contacts, made from the rod's pose at the step's start, hold some cases and throw the
+    // rod off in others; at 40 rad/s, 0.3 m from the wall, a tip turns through it within a step unless swept.
+    EXPECT_GT(spinningRodThroughWall(false, 40, 0.3f), 0) << "the case must tunnel without continuous collision";
+    for (float spin : {40.0f, 60.0f, 80.0f, 100.0f})
+        for (float wallX : {0.3f, 0.45f, 0.6f, 0.9f})
             EXPECT_EQ(spinningRodThroughWall(true, spin, wallX), 0) << spin << " " << wallX;
 }
 
