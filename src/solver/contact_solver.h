@@ -145,9 +145,10 @@ public:
     void warmStart(TaskPool& pool);
     /// `iterations` velocity iterations (a block runs all of them in one task). With bias, overlap is corrected by
     /// the chosen position correction; without, only speculative gaps are respected (the relax iterations of the
-    /// soft step, and split impulses' velocity pass). With `warmStartFirst`, warmStart() runs first in the same
-    /// tasks. With `joints`, each pass of a segment starts with its joints' pass (a block's joints in the block's task,
-    /// the large islands' joints on the calling thread before their colours).
+    /// soft step, and split impulses' velocity pass). The soft step's friction runs only without bias (in its relax
+    /// iterations), unless it has none. With `warmStartFirst`, warmStart() runs first in the same tasks. With `joints`,
+    /// each pass of a segment starts with its joints' pass (a block's joints in the block's task, the large islands'
+    /// joints on the calling thread before their colours).
     void solveVelocities(bool useBias, TaskPool& pool, int iterations = 1, bool warmStartFirst = false,
                          const JointPass* joints = nullptr);
     /// The segment an island's constraints are solved in since the last prepare(): its block, or blocks().size().
@@ -270,6 +271,7 @@ private:
     SolverSettings settings_;
     float h_ = 0;
     bool friction_ = true;
+    bool frictionInRelaxOnly_ = true;  ///< the soft step with relax iterations: friction is solved in those only
     bool rotation_ = true;
     int scratchRows_ = 1;
     bool moved_ = false;  ///< some body moved since prepare(): separations must follow the motion rows
