@@ -18,6 +18,8 @@ if [[ -d $build/lib/glibc-hwcaps ]]; then
   # A dispatch build (one core per x86-64 level): the suite once per level this CPU runs, the loader's own choice
   # first, the others by hiding from it (and from the core's check) the features of the levels above.
   levels=$(/lib64/ld-linux-x86-64.so.2 --help | grep -oE 'x86-64-v[234] \(supported' | cut -d' ' -f1)
+  # The hard cases' minute-long runs (HardCasesLong, about three minutes) on the first level only.
+  long=1
   for level in $levels; do
     case $level in
       x86-64-v4) hide= ;;
@@ -25,11 +27,12 @@ if [[ -d $build/lib/glibc-hwcaps ]]; then
       x86-64-v2) hide=glibc.cpu.hwcaps=-AVX2,-AVX512F ;;
     esac
     echo "== the suite on the core built for $level"
-    env RUBBLE_EXPECT_CORE_BUILD="$level" ${hide:+GLIBC_TUNABLES=$hide} \
+    env RUBBLE_EXPECT_CORE_BUILD="$level" ${hide:+GLIBC_TUNABLES=$hide} RUBBLE_LONG_TESTS=$long \
       ctest --test-dir "$build" --output-on-failure -j "$(nproc)"
+    long=0
   done
 else
-  ctest --test-dir "$build" --output-on-failure -j "$(nproc)"
+  RUBBLE_LONG_TESTS=$([[ -z $sanitize ]] && echo 1 || echo 0) ctest --test-dir "$build" --output-on-failure -j "$(nproc)"
 fi
 # The accuracy report's short run (about a minute), so that the command cannot rot; docs/ACCURACY.md comes from a
 # full run (`build/apps/rubble accuracy --out docs`).
