@@ -49,13 +49,14 @@ Softness soft(float hertz, float dampingRatio, float h) {
 }
 
 /// What building a batch's lanes gathers besides the batch itself: which lanes and points are used, and the bodies'
-/// velocities (for the approach speeds restitution needs).
+/// velocities and gravity along the normal (for the approach speeds restitution needs).
 struct BatchInputs {
     using Lanes = ContactBatch::Lanes;
     alignas(64) Lanes used = {};
     alignas(64) Lanes point[kMaxManifoldPoints] = {};
     alignas(64) Lanes vAx = {}, vAy = {}, vAz = {}, wAx = {}, wAy = {}, wAz = {};
     alignas(64) Lanes vBx = {}, vBy = {}, vBz = {}, wBx = {}, wBy = {}, wBz = {};
+    alignas(64) Lanes normalGravity = {};  ///< B's gravity less A's along the normal, m/s^2
 };
 
 /// The lane-parallel part of building a batch, in SIMD over its manifolds: friction directions, effective masses
@@ -103,6 +104,7 @@ void finishBatch(ContactBatch& b, ContactBatchExtras* extras, const BatchInputs&
             return simd::select(simd::andMask(present, sum > zero), F(1.0f) / sum, zero);
         };
         put(pt.normalMass, 0, effective(n));
+        if (extras) put(extras->normalGravity, 0, simd::select(used, at<F>(in.normalGravity, 0), zero));
         if (friction) {
             put(pt.tangentMass1, 0, effective(t1));
             put(pt.tangentMass2, 0, effective(t2));
@@ -236,7 +238,8 @@ void ContactSolver::prepare(const Contacts& contacts, const std::vector<PointImp
               softStep,
               // Soft contacts are damped springs from the first millimetre: a dead zone would only add to the sag
               // of stacks.
-              softStep ? 0.0f : settings_.linearSlop, settings_.warmStarting, bounce};
+              softStep ? 0.0f : settings_.linearSlop, settings_.warmStarting, bounce,
+              effects.has(Effect::Gravity) ? settings.gravity : Vec3{}};
     pool_ = &pool;
     blocksPending_ = !blocks_.empty();
     const ColorSpan whole =
@@ -296,7 +299,10 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
     for (std::size_t bi = begin; bi < end; ++bi) {
         ContactBatch& b = batches_[bi];
         ContactBatchExtras* extras = extrasOf(b);
-        if (extras) std::memset(static_cast<void*>(extras->restitution), 0, sizeof extras->restitution);
+        if (extras) {
+            std::memset(static_cast<void*>(extras->restitution), 0, sizeof extras->restitution);
+            std::memset(static_cast<void*>(extras->normalGravity), 0, sizeof extras->normalGravity);
+        }
         b.pointCount = batchPoints_[bi];
         std::memset(static_cast<void*>(&b), 0, offsetof(ContactBatch, pointCount));
         std::memset(static_cast<void*>(&b.nx), 0,
@@ -313,7 +319,7 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
             // Side data: position, velocities and material (the masses are in the mass rows).
             struct Side {
                 Vec3 p, v, w;
-                float friction = 0, restitution = 0;
+                float friction = 0, restitution = 0, gravityScale = 0;
                 std::int32_t row = 0;
                 bool dynamic = false;
             };
@@ -333,6 +339,7 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
                 sd.restitution = m.restitution[dense];
                 sd.row = solverIndex_[dense];
                 sd.dynamic = isDynamic(dense);
+                sd.gravityScale = sd.dynamic ? m.gravityScale[dense] : 0.0f;
                 return sd;
             };
             const Side A = side(pair.a, pair.aStatic), B = side(pair.b, pair.bStatic);
@@ -354,6 +361,7 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
             lanes.wAx[lane] = A.w.x, lanes.wAy[lane] = A.w.y, lanes.wAz[lane] = A.w.z;
             lanes.vBx[lane] = B.v.x, lanes.vBy[lane] = B.v.y, lanes.vBz[lane] = B.v.z;
             lanes.wBx[lane] = B.w.x, lanes.wBy[lane] = B.w.y, lanes.wBz[lane] = B.w.z;
+            lanes.normalGravity[lane] = dot(build_.gravity, n) * (B.gravityScale - A.gravityScale);
             for (int i = 0; i < mf.pointCount; ++i) {
                 const ContactPoint& cp = mf.points[i];
                 ContactBatch::Point& pt = b.points[i];

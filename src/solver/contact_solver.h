@@ -264,6 +264,7 @@ private:
         float slop = 0;
         bool warmStarting = true;
         bool bounce = false;
+        Vec3 gravity;  ///< zero without the gravity effect
     };
     BuildInputs build_;
     TaskPool* pool_ = nullptr;
