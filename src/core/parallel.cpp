@@ -110,6 +110,53 @@ struct TaskPool::Arena {
 
 #endif
 
+void TaskPool::forEachWorker(FunctionRef<void(int)> fn) {
+    if (threads_ == 1) {
+        const simd::FlushSubnormals flushSubnormals;
+        fn(0);
+        return;
+    }
+    arena_->run(static_cast<std::size_t>(threads_), [&](std::size_t, int worker) { fn(worker); });
+}
+
+void WorkPhases::reset(std::size_t phases, int workers) {
+    workers_ = workers;
+    const std::size_t counters = phases * static_cast<std::size_t>(workers);
+    if (capacity_ < std::max(counters, phases)) {
+        capacity_ = std::max(counters, phases) * 2;
+        cursors_ = std::make_unique<Counter[]>(capacity_);
+        done_ = std::make_unique<Counter[]>(capacity_);
+    }
+    for (std::size_t i = 0; i < counters; ++i) cursors_[i].value.store(0, std::memory_order_relaxed);
+    for (std::size_t i = 0; i < phases; ++i) done_[i].value.store(0, std::memory_order_relaxed);
+    starts_.assign(phases * static_cast<std::size_t>(workers + 1), 0);
+}
+
+void WorkPhases::setEven(std::size_t p, std::uint32_t count) {
+    for (int w = 0; w <= workers_; ++w)
+        starts_[p * static_cast<std::size_t>(workers_ + 1) + static_cast<std::size_t>(w)] = static_cast<std::uint32_t>(
+            std::uint64_t{count} * static_cast<std::uint64_t>(w) / static_cast<std::uint64_t>(workers_));
+}
+
+void WorkPhases::setShares(std::size_t p, const std::uint32_t* starts) {
+    std::copy(starts, starts + workers_ + 1, starts_.begin() + static_cast<std::ptrdiff_t>(p * (workers_ + 1)));
+}
+
+void WorkPhases::wait(std::size_t p) const {
+    // A phase's units take microseconds: spin first, but give the core away if the other worker was descheduled
+    // (these machines are shared).
+    const std::uint32_t units = count(p);
+    for (int spin = 0; done_[p].value.load(std::memory_order_acquire) < units; ++spin) {
+        if (spin < 256) {
+#if defined(__x86_64__) || defined(__i386__)
+            __builtin_ia32_pause();
+#endif
+        } else {
+            std::this_thread::yield();
+        }
+    }
+}
+
 TaskPool::TaskPool(int threads)
     : threads_(threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))),
       arena_(std::make_unique<Arena>(threads_)) {}

@@ -439,8 +439,88 @@ void ContactSolver::solveRange(const ColorRange& range, const BodyRows& rows, Ke
 }
 
 template <class Kernel>
+void ContactSolver::forEachColorInOneRegion(TaskPool& pool, Kernel& kernel, int passes, int firstIteration) {
+    // The phases, in the order forEachColor runs them (the large islands' passes after the blocks; here the two
+    // overlap, since they share no body: a worker done with the blocks goes on to the large islands).
+    phaseWork_.clear();
+    phaseWork_.push_back({});
+    for (int pass = 0; pass < passes; ++pass) {
+        const bool crossingFirst = !slabs_.empty() && pass >= firstIteration && (pass - firstIteration) % 2 == 0;
+        const auto colours = [&] {
+            for (std::uint32_t c = 0; c < large_.colorCount; ++c) phaseWork_.push_back({large_.firstColor + c, pass});
+        };
+        if (crossingFirst) colours();
+        if (!slabs_.empty()) phaseWork_.push_back({kSlabsPhase, pass});
+        if (!crossingFirst) colours();
+    }
+    const int workers = pool.threadCount();
+    phases_.reset(phaseWork_.size(), workers);
+    // The blocks in shares of about equal batch counts (a block's batches follow the previous block's).
+    blockShareStart_.assign(static_cast<std::size_t>(workers) + 1, static_cast<std::uint32_t>(blocks_.size()));
+    blockShareStart_[0] = 0;
+    if (!blocks_.empty()) {
+        const auto firstBatchOf = [&](std::size_t bl) { return colors_[blocks_[bl].firstColor].firstBatch; };
+        const ColorSpan& last = blocks_.back();
+        const ColorRange& lastRange = colors_[last.firstColor + last.colorCount - 1];
+        const std::size_t first = firstBatchOf(0), total = lastRange.firstBatch + lastRange.batchCount - first;
+        std::uint32_t bl = 0;
+        for (int w = 1; w < workers; ++w) {
+            const std::size_t target = first + total * static_cast<std::size_t>(w) / static_cast<std::size_t>(workers);
+            while (bl < blocks_.size() && firstBatchOf(bl) < target) ++bl;
+            blockShareStart_[static_cast<std::size_t>(w)] = bl;
+        }
+    }
+    phases_.setShares(0, blockShareStart_.data());
+    for (std::size_t p = 1; p < phaseWork_.size(); ++p) {
+        const PhaseWork& w = phaseWork_[p];
+        const std::size_t units = w.color == kSlabsPhase ? slabs_.size()
+                                  : colors_[w.color].overflow
+                                      ? 1
+                                      : TaskPool::chunkCount(colors_[w.color].batchCount, kBatchChunk);
+        phases_.setEven(p, static_cast<std::uint32_t>(units));
+    }
+    const bool buildBlocks = blocksPending_;
+    pool.forEachWorker([&](int worker) {
+        const BodyRows rows = rowsFor(worker);
+        phases_.run(0, worker, [&](std::uint32_t bl) {
+            if (buildBlocks) buildBlock(bl);
+            for (int pass = 0; pass < passes; ++pass)
+                for (std::uint32_t c = 0; c < blocks_[bl].colorCount; ++c)
+                    solveRange(colors_[blocks_[bl].firstColor + c], rows, kernel, pass);
+        });
+        for (std::size_t p = 1; p < phaseWork_.size(); ++p) {
+            const PhaseWork& w = phaseWork_[p];
+            phases_.run(p, worker, [&](std::uint32_t unit) {
+                if (w.color == kSlabsPhase) {
+                    for (std::uint32_t c = 0; c < slabs_[unit].colorCount; ++c)
+                        solveRange(colors_[slabs_[unit].firstColor + c], rows, kernel, w.pass);
+                    return;
+                }
+                const ColorRange& range = colors_[w.color];
+                if (range.overflow) {
+                    solveRange(range, rows, kernel, w.pass);
+                    return;
+                }
+                const std::size_t begin = std::size_t{unit} * kBatchChunk;
+                const std::size_t end = std::min<std::size_t>(range.batchCount, begin + kBatchChunk);
+                for (std::size_t i = begin; i < end; ++i)
+                    kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows, w.pass);
+            });
+            phases_.wait(p);
+        }
+        phases_.wait(0);
+    });
+    blocksPending_ = false;
+}
+
+template <class Kernel>
 void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel, int passes, const JointPass* joints,
                                  int firstIteration) {
+    // Without joints (whose large-island pass runs on the calling thread, across the pool), in one region.
+    if (joints == nullptr && pool.threadCount() > 1) {
+        forEachColorInOneRegion(pool, kernel, passes, firstIteration);
+        return;
+    }
     // Blocks share no body with each other or with the large islands: each runs all its iterations in one task.
     if (!blocks_.empty()) {
         pool.forChunks(blocks_.size(), 1, [&](std::size_t, std::size_t begin, std::size_t end, int worker) {

@@ -209,6 +209,11 @@ private:
     template <class Kernel>
     void forEachColor(TaskPool& pool, Kernel&& kernel, int passes = 1, const JointPass* joints = nullptr,
                       int firstIteration = std::numeric_limits<int>::max());
+    /// forEachColor's work in one parallel region (more than one thread, no joints): each worker runs its share of
+    /// the blocks, then pass by pass its share of each of the large islands' colours and of the slabs, helping with
+    /// the others' shares when done, with a barrier after each colour instead of a fork and join.
+    template <class Kernel>
+    void forEachColorInOneRegion(TaskPool& pool, Kernel& kernel, int passes, int firstIteration);
     template <class Kernel>
     void solveRange(const ColorRange& range, const BodyRows& rows, Kernel& kernel, int pass);
     /// Lists the manifolds by block (blocks_ spans, then the slabs, then large_), into segmentManifolds_ /
@@ -267,6 +272,17 @@ private:
         Vec3 gravity;  ///< zero without the gravity effect
     };
     BuildInputs build_;
+    /// What each phase of forEachColorInOneRegion is: the blocks (phase 0), then per pass a colour of the large
+    /// islands (its colour index) or the slabs (kSlabsPhase).
+    struct PhaseWork {
+        std::uint32_t color = 0;
+        int pass = 0;
+    };
+    static constexpr std::uint32_t kSlabsPhase = ~0u;
+    std::vector<PhaseWork> phaseWork_;
+    std::vector<std::uint32_t>
+        blockShareStart_;  ///< each worker's share of the blocks (about equal work), then the end
+    WorkPhases phases_;
     TaskPool* pool_ = nullptr;
     bool blocksPending_ = false;  ///< the blocks' rows are still to be built
     SolverSettings settings_;
