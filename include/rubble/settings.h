@@ -139,8 +139,9 @@ struct WorldSettings {
     /// Box3D does within 5 cm and Jolt's body pair cache within 1 mm and 2 degrees): their normal and where they hold
     /// each body stay as computed, and their depths follow the bodies. Besides saving the narrow phase's work, this is
     /// what lets tall stacks stand: soft contacts sag, and contacts computed again every step from the sagged stack
-    /// turn its small lean into sideways pushes that lean it further (docs/solver_defaults.md). 0 computes every pair
-    /// every step, m.
+    /// turn its small lean into sideways pushes that lean it further (docs/solver_defaults.md). Pairs of spheres and
+    /// capsules are computed every step (their kernels cost less than the lookup). 0 computes every pair every
+    /// step, m.
     float manifoldReuseDistance = 0.02f;
     /// A pair of polytopes (hull-hull, box-hull) that touched last step makes its contact again from the feature
     /// that decided it (a reference face or an edge pair) without testing every axis, while that feature's

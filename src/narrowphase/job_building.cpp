@@ -1,6 +1,7 @@
 // A chunk's candidates into jobs: each candidate either gets its manifolds of an earlier step again (when its bodies
-// have hardly moved: manifold_reuse.h) or becomes jobs to compute, one per pair of shapes (a compound's children are
-// split) or one per body's run of mesh triangles, with its reuse entry pending until they are computed.
+// have hardly moved and its pair is recycled: manifold_reuse.h) or becomes jobs to compute, one per pair of shapes (a
+// compound's children are split) or one per body's run of mesh triangles, with its reuse entry pending until they are
+// computed.
 #if defined(__GNUC__) && !defined(__clang__)
 // GCC 12's SLP vectoriser fuses the alternating a*b - c / a*b + c lanes of the quaternion product (poseChange) into
 // vfmsubadd even under -ffp-contract=off: the reuse test would then round differently from one build level to
@@ -50,12 +51,13 @@ public:
     }
 
 private:
-    /// A candidate: its manifolds again if its bodies have hardly moved (true: no jobs are made), else an entry that
-    /// takes this step's manifolds (pending until they are made).
+    /// A candidate: its manifolds again if its pair is recycled and its bodies have hardly moved (true: no jobs are
+    /// made), else, for a recycled pair, an entry that takes this step's manifolds (pending until they are made).
     bool reuseOrKeep(ManifoldReuse::Section section, std::uint32_t first, std::uint32_t second, bool secondStatic) {
         const MovingBodies& m = storage_.moving;
         const StaticBodies& st = storage_.statics;
         const std::uint32_t shape1 = m.shape[first], shape2 = secondStatic ? st.shape[second] : m.shape[second];
+        if (!recycled(tables_.kind[shape1], tables_.kind[shape2])) return false;
         // Written in place (a whole Entry built on the stack and copied in stalls on store forwarding).
         const auto entryIndex = static_cast<std::uint32_t>(cache_->entries.size());
         ManifoldReuse::Entry& now = cache_->entries.emplace_back();

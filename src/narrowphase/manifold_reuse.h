@@ -8,10 +8,10 @@
 // the bodies' centres, and each depth follows the relative motion of the bodies at that point along the normal
 // (moveManifold), so a resting pair's depth does not freeze while the solver moves its bodies.
 //
-// The stage keeps, per parallel chunk of candidates, an entry for every candidate: the bodies' poses and the
-// speculative margin when its manifolds were computed, and those manifolds. A reused entry is copied forward
-// unchanged, so the motion is always measured from the step that computed it and the manifolds are computed again
-// once it adds up to the tolerance.
+// The stage keeps, per parallel chunk of candidates, an entry for every candidate whose pair is recycled (all but
+// sphere and capsule pairs: pair_kernels.h, recycled()): the bodies' poses and the speculative margin when its
+// manifolds were computed, and those manifolds. A reused entry is copied forward unchanged, so the motion is always
+// measured from the step that computed it and the manifolds are computed again once it adds up to the tolerance.
 #include <cstdint>
 #include <vector>
 
