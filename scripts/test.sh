@@ -18,7 +18,7 @@ if [[ -d $build/lib/glibc-hwcaps ]]; then
   # A dispatch build (one core per x86-64 level): the suite once per level this CPU runs, the loader's own choice
   # first, the others by hiding from it (and from the core's check) the features of the levels above.
   levels=$(/lib64/ld-linux-x86-64.so.2 --help | grep -oE 'x86-64-v[234] \(supported' | cut -d' ' -f1)
-  # The hard cases' minute-long runs (HardCasesLong, about three minutes) on the first level only.
+  # The hard cases' minute-long runs (HardCasesLong, about five minutes beside the suite) on the first level only.
   long=1
   for level in $levels; do
     case $level in

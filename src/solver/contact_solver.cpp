@@ -93,6 +93,7 @@ void finishBatch(ContactBatch& b, ContactBatchExtras* extras, const BatchInputs&
     const simd::SymMat3W<F>&iA = massA.inverseInertia, &iB = massB.inverseInertia;
     const simd::Vec3W<F> vA = at3<F>(in.vAx, in.vAy, in.vAz, 0), wA = at3<F>(in.wAx, in.wAy, in.wAz, 0);
     const simd::Vec3W<F> vB = at3<F>(in.vBx, in.vBy, in.vBz, 0), wB = at3<F>(in.wBx, in.wBy, in.wBz, 0);
+    if (extras) put(extras->normalGravity, 0, simd::select(used, at<F>(in.normalGravity, 0), zero));
     for (int i = 0; i < b.pointCount; ++i) {
         const auto present = at<F>(in.point[i], 0) > zero;
         if (!simd::any(present)) continue;
@@ -104,7 +105,6 @@ void finishBatch(ContactBatch& b, ContactBatchExtras* extras, const BatchInputs&
             return simd::select(simd::andMask(present, sum > zero), F(1.0f) / sum, zero);
         };
         put(pt.normalMass, 0, effective(n));
-        if (extras) put(extras->normalGravity, 0, simd::select(used, at<F>(in.normalGravity, 0), zero));
         if (friction) {
             put(pt.tangentMass1, 0, effective(t1));
             put(pt.tangentMass2, 0, effective(t2));
@@ -299,10 +299,7 @@ void ContactSolver::buildBatches(std::uint32_t begin, std::uint32_t end) {
     for (std::size_t bi = begin; bi < end; ++bi) {
         ContactBatch& b = batches_[bi];
         ContactBatchExtras* extras = extrasOf(b);
-        if (extras) {
-            std::memset(static_cast<void*>(extras->restitution), 0, sizeof extras->restitution);
-            std::memset(static_cast<void*>(extras->normalGravity), 0, sizeof extras->normalGravity);
-        }
+        if (extras) std::memset(static_cast<void*>(extras->restitution), 0, sizeof extras->restitution);
         b.pointCount = batchPoints_[bi];
         std::memset(static_cast<void*>(&b), 0, offsetof(ContactBatch, pointCount));
         std::memset(static_cast<void*>(&b.nx), 0,
@@ -445,13 +442,13 @@ void ContactSolver::forEachColorInOneRegion(TaskPool& pool, Kernel& kernel, int 
     phaseWork_.clear();
     phaseWork_.push_back({});
     for (int pass = 0; pass < passes; ++pass) {
-        const bool crossingFirst = !slabs_.empty() && pass >= firstIteration && (pass - firstIteration) % 2 == 0;
+        const bool before = crossingFirst(pass, firstIteration);
         const auto colours = [&] {
             for (std::uint32_t c = 0; c < large_.colorCount; ++c) phaseWork_.push_back({large_.firstColor + c, pass});
         };
-        if (crossingFirst) colours();
+        if (before) colours();
         if (!slabs_.empty()) phaseWork_.push_back({kSlabsPhase, pass});
-        if (!crossingFirst) colours();
+        if (!before) colours();
     }
     const int workers = pool.threadCount();
     phases_.reset(phaseWork_.size(), workers);
@@ -484,16 +481,13 @@ void ContactSolver::forEachColorInOneRegion(TaskPool& pool, Kernel& kernel, int 
         const BodyRows rows = rowsFor(worker);
         phases_.run(0, worker, [&](std::uint32_t bl) {
             if (buildBlocks) buildBlock(bl);
-            for (int pass = 0; pass < passes; ++pass)
-                for (std::uint32_t c = 0; c < blocks_[bl].colorCount; ++c)
-                    solveRange(colors_[blocks_[bl].firstColor + c], rows, kernel, pass);
+            for (int pass = 0; pass < passes; ++pass) solveSpan(blocks_[bl], rows, kernel, pass);
         });
         for (std::size_t p = 1; p < phaseWork_.size(); ++p) {
             const PhaseWork& w = phaseWork_[p];
             phases_.run(p, worker, [&](std::uint32_t unit) {
                 if (w.color == kSlabsPhase) {
-                    for (std::uint32_t c = 0; c < slabs_[unit].colorCount; ++c)
-                        solveRange(colors_[slabs_[unit].firstColor + c], rows, kernel, w.pass);
+                    solveSpan(slabs_[unit], rows, kernel, w.pass);
                     return;
                 }
                 const ColorRange& range = colors_[w.color];
@@ -502,9 +496,8 @@ void ContactSolver::forEachColorInOneRegion(TaskPool& pool, Kernel& kernel, int 
                     return;
                 }
                 const std::size_t begin = std::size_t{unit} * kBatchChunk;
-                const std::size_t end = std::min<std::size_t>(range.batchCount, begin + kBatchChunk);
-                for (std::size_t i = begin; i < end; ++i)
-                    kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows, w.pass);
+                solveBatches(range, begin, std::min<std::size_t>(range.batchCount, begin + kBatchChunk), rows, kernel,
+                             w.pass);
             });
             phases_.wait(p);
         }
@@ -529,8 +522,7 @@ void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel, int passes, co
                 if (blocksPending_) buildBlock(bl);
                 for (int pass = 0; pass < passes; ++pass) {
                     if (joints) (*joints)(static_cast<std::uint32_t>(bl), pass);
-                    for (std::uint32_t c = 0; c < blocks_[bl].colorCount; ++c)
-                        solveRange(colors_[blocks_[bl].firstColor + c], rows, kernel, pass);
+                    solveSpan(blocks_[bl], rows, kernel, pass);
                 }
             }
         });
@@ -546,12 +538,10 @@ void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel, int passes, co
                 solveRange(range, rows, kernel, pass);
                 continue;
             }
-            pool.forChunks(
-                range.batchCount, kBatchChunk, [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
-                    const BodyRows rows = rowsFor(worker);
-                    for (std::size_t i = begin; i < end; ++i)
-                        kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows, pass);
-                });
+            pool.forChunks(range.batchCount, kBatchChunk,
+                           [&](std::size_t, std::size_t begin, std::size_t end, int worker) {
+                               solveBatches(range, begin, end, rowsFor(worker), kernel, pass);
+                           });
         }
     };
     for (int pass = 0; pass < passes; ++pass) {
@@ -559,15 +549,13 @@ void ContactSolver::forEachColor(TaskPool& pool, Kernel&& kernel, int passes, co
         // The manifolds that cross the slabs run before them in every other iteration and after them otherwise (and
         // in a warm start or a bounce), so that loads pass both ways across the cut: S5's wall, cut in two, sags
         // 1.0 cm so, 16 cm with the crossing manifolds always after the slabs (2.0 cm uncut).
-        const bool crossingFirst = !slabs_.empty() && pass >= firstIteration && (pass - firstIteration) % 2 == 0;
-        if (crossingFirst) solveColorByColor(pass);
+        const bool before = crossingFirst(pass, firstIteration);
+        if (before) solveColorByColor(pass);
         if (!slabs_.empty())
             pool.forChunks(slabs_.size(), 1, [&](std::size_t slab, std::size_t, std::size_t, int worker) {
-                const BodyRows rows = rowsFor(worker);
-                for (std::uint32_t c = 0; c < slabs_[slab].colorCount; ++c)
-                    solveRange(colors_[slabs_[slab].firstColor + c], rows, kernel, pass);
+                solveSpan(slabs_[slab], rowsFor(worker), kernel, pass);
             });
-        if (!crossingFirst) solveColorByColor(pass);
+        if (!before) solveColorByColor(pass);
     }
 }
 

@@ -216,6 +216,23 @@ private:
     void forEachColorInOneRegion(TaskPool& pool, Kernel& kernel, int passes, int firstIteration);
     template <class Kernel>
     void solveRange(const ColorRange& range, const BodyRows& rows, Kernel& kernel, int pass);
+    /// Every colour of a block or slab in order, one pass.
+    template <class Kernel>
+    void solveSpan(const ColorSpan& span, const BodyRows& rows, Kernel& kernel, int pass) {
+        for (std::uint32_t c = 0; c < span.colorCount; ++c)
+            solveRange(colors_[span.firstColor + c], rows, kernel, pass);
+    }
+    /// Batches [begin, end) of a colour that is not an overflow, one pass.
+    template <class Kernel>
+    void solveBatches(const ColorRange& range, std::size_t begin, std::size_t end, const BodyRows& rows, Kernel& kernel,
+                      int pass) {
+        for (std::size_t i = begin; i < end; ++i)
+            kernel.template operator()<simd::FloatW>(batches_[range.firstBatch + i], 0, rows, pass);
+    }
+    /// Whether the manifolds that cross the slabs run before them in this pass (see forEachColor).
+    bool crossingFirst(int pass, int firstIteration) const {
+        return !slabs_.empty() && pass >= firstIteration && (pass - firstIteration) % 2 == 0;
+    }
     /// Lists the manifolds by block (blocks_ spans, then the slabs, then large_), into segmentManifolds_ /
     /// segmentStart_.
     void partition(const Contacts& contacts, const Islands* islands, const MovingBodies& m);

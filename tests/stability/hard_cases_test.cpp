@@ -258,9 +258,9 @@ TEST(HardCases, BouncingBallKeepsItsHeight) {
 
 // The hard cases and the standard scenes for ten times their files' steps (S5 and S5d for 3,600 steps, a minute) at
 // the defaults with the guess on: a case that holds only for the length of its file does not hold. They take about
-// three minutes on two cores, so scripts/test.sh runs them once, on the first core level it tests
-// (RUBBLE_LONG_TESTS=1), and skips them on the others and under the sanitizers. Bounds are the short cases' unless
-// stated; measured figures in docs/solver_defaults.md ("Long runs").
+// five minutes on two cores beside the rest of the suite, so scripts/test.sh runs them once, on the first core level it
+// tests (RUBBLE_LONG_TESTS=1), and skips them on the others and under the sanitizers. Bounds are the short cases'
+// unless stated; measured figures in docs/solver_defaults.md ("Long runs").
 class HardCasesLong : public ::testing::Test {
 protected:
     void SetUp() override {
