@@ -52,18 +52,31 @@ void generatePyramids(const PyramidParams& p, const GeneratorCommon& common, std
     }
 }
 
+Quat randomRotation(std::mt19937& rng) {
+    // Shoemake (Graphics Gems III): three uniform numbers give a unit quaternion uniform on the 3-sphere, so every
+    // orientation is as likely as any other.
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    const double u1 = unit(rng), u2 = unit(rng), u3 = unit(rng);
+    const double a = std::sqrt(1.0 - u1), c = std::sqrt(u1), turn = 2.0 * 3.14159265358979323846;
+    return {static_cast<float>(a * std::sin(turn * u2)), static_cast<float>(a * std::cos(turn * u2)),
+            static_cast<float>(c * std::sin(turn * u3)), static_cast<float>(c * std::cos(turn * u3))};
+}
+
 double gridBodyCount(const GridParams& p) {
     return static_cast<double>(p.count[0]) * static_cast<double>(p.count[1]) * static_cast<double>(p.count[2]);
 }
 
 void generateGrid(const GridParams& p, const GeneratorCommon& common, std::vector<SceneBody>& out) {
     std::uint64_t index = 0;
+    std::mt19937 rng(p.seed);
     for (std::uint32_t l = 0; l < p.count[1]; ++l) {
         const double y = p.origin[1] + static_cast<double>(l) * p.spacing[1];
         for (std::uint32_t i = 0; i < p.count[0]; ++i) {
             const double x = p.origin[0] + static_cast<double>(i) * p.spacing[0];
-            for (std::uint32_t j = 0; j < p.count[2]; ++j)
+            for (std::uint32_t j = 0; j < p.count[2]; ++j) {
                 out.push_back(makeBody(common, index++, x, y, p.origin[2] + static_cast<double>(j) * p.spacing[2]));
+                if (p.drawRotation) out.back().def.orientation = randomRotation(rng);
+            }
         }
     }
 }
@@ -88,6 +101,7 @@ void generateRandom(const RandomParams& p, const GeneratorCommon& common, std::v
             b.def.linearVelocity.y = vel[1](rng);
             b.def.linearVelocity.z = vel[2](rng);
         }
+        if (p.drawRotation) b.def.orientation = randomRotation(rng);
         out.push_back(b);
     }
 }

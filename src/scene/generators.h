@@ -3,6 +3,7 @@
 // fills one of these parameter structs; the functions here only compute positions, so the arithmetic that the
 // standard scenes (SCENES.md) depend on lives in one place. Positions are computed in double and rounded once.
 #include <cstdint>
+#include <random>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -51,19 +52,27 @@ struct PyramidParams {
 double pyramidBodyCount(const PyramidParams& p);
 void generatePyramids(const PyramidParams& p, const GeneratorCommon& common, std::vector<SceneBody>& out);
 
+/// An orientation uniform over all rotations, from three draws of std::uniform_real_distribution<float>(0, 1)
+/// (Shoemake's method).
+Quat randomRotation(std::mt19937& rng);
+
 /// A box lattice: count[1] layers (y) outermost, then count[0] (x), then count[2] (z); the first body's centre is
-/// `origin`, body (i, l, j) sits at origin + (i sx, l sy, j sz).
+/// `origin`, body (i, l, j) sits at origin + (i sx, l sy, j sz). With drawRotation, each body in creation order gets
+/// randomRotation() from std::mt19937(seed).
 struct GridParams {
     std::uint32_t count[3] = {1, 1, 1};
     double spacing[3] = {1, 1, 1};
     double origin[3] = {0, 0, 0};
+    bool drawRotation = false;
+    std::uint32_t seed = 42;
 };
 
 double gridBodyCount(const GridParams& p);
 void generateGrid(const GridParams& p, const GeneratorCommon& common, std::vector<SceneBody>& out);
 
 /// Uniform random bodies: std::mt19937(seed); for each body in order x, y, z from
-/// std::uniform_real_distribution<float>(min[a], max[a]), then (if drawVelocity) vx, vy, vz likewise.
+/// std::uniform_real_distribution<float>(min[a], max[a]), then (if drawVelocity) vx, vy, vz likewise, then (if
+/// drawRotation) randomRotation().
 struct RandomParams {
     std::uint64_t count = 0;
     std::uint32_t seed = 42;
@@ -72,6 +81,7 @@ struct RandomParams {
     bool drawVelocity = false;
     float velocityMin[3] = {0, 0, 0};
     float velocityMax[3] = {0, 0, 0};
+    bool drawRotation = false;
 };
 
 void generateRandom(const RandomParams& p, const GeneratorCommon& common, std::vector<SceneBody>& out);

@@ -1015,6 +1015,14 @@ void Builder::parseBodies(const Json& j, const Loc& at) {
 }
 
 void Builder::parseGenerators(const Json& j, const Loc& at) {
+    // A generator's random_rotation: whether it draws each body's orientation (instead of one `rotation` for all).
+    const auto randomRotation = [](const Json& o, const Loc& g) {
+        if (!o.contains("random_rotation")) return false;
+        const bool draw = getBool(o["random_rotation"], g / "random_rotation");
+        if (draw && o.contains("rotation"))
+            (g / "random_rotation").fail("give either 'rotation' or 'random_rotation', not both");
+        return draw;
+    };
     const Json& arr = expectArray(j, at, "an array of generators");
     for (std::size_t gi = 0; gi < arr.size(); ++gi) {
         const Loc g = at / gi;
@@ -1090,7 +1098,7 @@ void Builder::parseGenerators(const Json& j, const Loc& at) {
             reserveBodies(scene_detail::pyramidBodyCount(p), g);
             scene_detail::generatePyramids(p, common, scene.bodies);
         } else if (type == "grid") {
-            checkKeys(o, g, {"count", "spacing", "origin"}, kGeneratorBodyKeys);
+            checkKeys(o, g, {"count", "spacing", "origin", "random_rotation", "seed"}, kGeneratorBodyKeys);
             finishCommon();
             for (const char* k : {"count", "spacing"}) require(o, g, k);
             scene_detail::GridParams p;
@@ -1101,10 +1109,16 @@ void Builder::parseGenerators(const Json& j, const Loc& at) {
                 p.count[a] = static_cast<std::uint32_t>(getInt(o["count"][a], cl / a, 0, 1'000'000'000));
             getDoubles(o["spacing"], g / "spacing", p.spacing, Sign::NonNegative);
             if (o.contains("origin")) getDoubles(o["origin"], g / "origin", p.origin, Sign::Any, false);
+            p.drawRotation = randomRotation(o, g);
+            if (o.contains("seed")) {
+                if (!p.drawRotation) (g / "seed").fail("a grid draws nothing without 'random_rotation'");
+                p.seed = static_cast<std::uint32_t>(getInt(o["seed"], g / "seed", 0, 0xFFFFFFFF));
+            }
             reserveBodies(scene_detail::gridBodyCount(p), g);
             scene_detail::generateGrid(p, common, scene.bodies);
         } else {  // random
-            checkKeys(o, g, {"count", "seed", "min", "max", "velocity_min", "velocity_max"}, kGeneratorBodyKeys);
+            checkKeys(o, g, {"count", "seed", "min", "max", "velocity_min", "velocity_max", "random_rotation"},
+                      kGeneratorBodyKeys);
             finishCommon();
             for (const char* k : {"count", "min", "max"}) require(o, g, k);
             scene_detail::RandomParams p;
@@ -1136,6 +1150,7 @@ void Builder::parseGenerators(const Json& j, const Loc& at) {
             };
             checkRange(p.min, p.max, "max");
             if (vmin) checkRange(p.velocityMin, p.velocityMax, "velocity_max");
+            p.drawRotation = randomRotation(o, g);
             reserveBodies(static_cast<double>(p.count), g / "count");
             scene_detail::generateRandom(p, common, scene.bodies);
         }
