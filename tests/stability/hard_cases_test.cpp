@@ -320,9 +320,9 @@ TEST_F(HardCasesLong, S1dPyramidDroppedHolds) {
 // The small hard cases for ten times their steps. Measured: tower 0.216 m and 0.4 mm/s at the end; heavy on light
 // 1.88 cm, light-heavy-light 3.17 cm, both at rest; arch 5.1 mm, cards 0.6 mm, far pyramid 0.7 mm; dominoes all
 // down and still; the overfilled container holds all (0.20 m/s at most, at rest at the end); the overlapping
-// pyramid at rest; the ramp slides exactly its five; the heavy chain stretches 1.1 cm; the bouncing ball still
-// reaches 4.494 m after 100 s. Not held, and left out: the slab on small cubes (falls) and the hanging sheet (1.33 cm
-// after 1,000 steps, over its 1 cm).
+// pyramid at rest; the ramp slides exactly its five; the heavy chain stretches 1.1 cm; the crate heap asleep, and
+// without sleeping still (under 0.05 mm/s); the bouncing ball still reaches 4.494 m after 100 s. Not held, and left
+// out: the slab on small cubes (falls) and the hanging sheet (1.33 cm after 1,000 steps, over its 1 cm).
 TEST_F(HardCasesLong, SmallCasesHoldTheirFigures) {
     const SceneRun tower = longRun(sceneFile("hard/tower_dropped.json"));
     EXPECT_LT(tower.figure(SceneFigure::MaxDisplacement), 0.19 + 0.05);
@@ -355,6 +355,10 @@ TEST_F(HardCasesLong, SmallCasesHoldTheirFigures) {
             EXPECT_LT(slid.displacement(i, ramp), 0.001f) << "friction " << mu;
     }
     EXPECT_LT(longRun(sceneFile("hard/chain_heavy_ball.json")).figure(SceneFigure::JointStretch), 0.06);
+    Scene crates = sceneFile("hard/crate_heap.json");
+    EXPECT_LE(longRun(crates).figure(SceneFigure::FinalSpeed), 1e-6) << "asleep";
+    crates.settings.effects = crates.settings.effects.without(Effect::Sleeping);
+    EXPECT_LT(longRun(crates).figure(SceneFigure::FinalSpeed), 0.05) << "awake";
     const double apex = longRun(sceneFile("hard/bouncing_ball.json")).figure(SceneFigure::LateApex);
     EXPECT_LE(apex, 4.5 + 0.01);
     EXPECT_GE(apex, 4.5 - 0.04);
