@@ -226,6 +226,25 @@ TEST(SceneLoader, OnlyRegularFilesAreRead) {
     std::remove(fifo.c_str());
 }
 
+// A rotation's axis may be any non-zero vector the format can write and its angle any finite number: an axis of
+// 1e31 (whose squared length overflows a float) or 1e-30 (underflows), and angles of 1e30, once gave a quaternion of
+// length 0.92 that the World refused after the loader had accepted it (fuzzing: tests/data/fuzz/scene_loader/
+// finding_rotation_axis_of_1e31.json). Each is the rotation its reduced angle names, of unit length.
+TEST(SceneLoader, RotationsOfExtremeAxesAndAnglesAreUnitQuaternions) {
+    const Scene s =
+        loadScene(std::string(RUBBLE_TEST_DATA_DIR) + "/fuzz/scene_loader/finding_rotation_axis_of_1e31.json");
+    ASSERT_EQ(s.bodies.size(), 3u);
+    for (const SceneBody& b : s.bodies) {
+        const Quat q = b.def.orientation;
+        EXPECT_NEAR(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w, 1.0f, 1e-6f);
+    }
+    const Quat eighth = Quat::fromAxisAngle({0, 0, 1}, 3.14159265358979f / 4);
+    EXPECT_NEAR(s.bodies[0].def.orientation.z, eighth.z, 1e-6f);
+    EXPECT_NEAR(s.bodies[0].def.orientation.w, eighth.w, 1e-6f);
+    World world{WorldSettings{}};
+    EXPECT_EQ(instantiate(s, world).size(), 3u);
+}
+
 TEST(SceneLoader, SolverKnobsReachTheSettings) {
     const Scene s = parseScene(R"({"settings": {"position_correction": "soft_step", "contact_hertz": 45,
         "contact_damping_ratio": 2, "max_push_out_velocity": 1.5, "baumgarte": 0.1, "linear_slop": 0.001,

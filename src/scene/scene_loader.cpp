@@ -520,12 +520,18 @@ Quat getRotation(const Json& j, const Loc& at) {
     checkKeys(j, at, {"axis", "degrees", "radians"});
     require(j, at, "axis");
     const Vec3 axis = getVec3(j["axis"], at / "axis");
-    if (!(length(axis) > 0)) (at / "axis").fail("axis must not be zero");
+    // In double: a float axis of 1e30 has a squared length beyond float's range (the rotation came out of unit
+    // length), and one of 1e-30 one below it.
+    const double ax = axis.x, ay = axis.y, az = axis.z, len = std::sqrt(ax * ax + ay * ay + az * az);
+    if (!(len > 0)) (at / "axis").fail("axis must not be zero");
     const bool deg = j.contains("degrees"), rad = j.contains("radians");
     if (deg == rad) at.fail("give exactly one of 'degrees' and 'radians'");
-    const double angle = deg ? getDouble(j["degrees"], at / "degrees") * (3.14159265358979323846 / 180.0)
-                             : getDouble(j["radians"], at / "radians");
-    return Quat::fromAxisAngle(axis, static_cast<float>(angle));
+    // Two turns are the quaternion's period: reduced first, a huge angle keeps sine and cosine consistent.
+    constexpr double kPi = 3.14159265358979323846;
+    const double angle = deg ? std::fmod(getDouble(j["degrees"], at / "degrees"), 720.0) * (kPi / 180.0)
+                             : std::fmod(getDouble(j["radians"], at / "radians"), 4.0 * kPi);
+    const Vec3 unit{static_cast<float>(ax / len), static_cast<float>(ay / len), static_cast<float>(az / len)};
+    return Quat::fromAxisAngle(unit, static_cast<float>(angle));
 }
 
 /// The end of a message about a body position past limits::kMaxCoordinate, the World's limit.
