@@ -1022,7 +1022,7 @@ void Builder::parseBodies(const Json& j, const Loc& at) {
 
 void Builder::parseGenerators(const Json& j, const Loc& at) {
     // A generator's random_rotation: whether it draws each body's orientation (instead of one `rotation` for all).
-    const auto randomRotation = [](const Json& o, const Loc& g) {
+    const auto drawsRotations = [](const Json& o, const Loc& g) {
         if (!o.contains("random_rotation")) return false;
         const bool draw = getBool(o["random_rotation"], g / "random_rotation");
         if (draw && o.contains("rotation"))
@@ -1115,7 +1115,7 @@ void Builder::parseGenerators(const Json& j, const Loc& at) {
                 p.count[a] = static_cast<std::uint32_t>(getInt(o["count"][a], cl / a, 0, 1'000'000'000));
             getDoubles(o["spacing"], g / "spacing", p.spacing, Sign::NonNegative);
             if (o.contains("origin")) getDoubles(o["origin"], g / "origin", p.origin, Sign::Any, false);
-            p.drawRotation = randomRotation(o, g);
+            p.drawRotation = drawsRotations(o, g);
             if (o.contains("seed")) {
                 if (!p.drawRotation) (g / "seed").fail("a grid draws nothing without 'random_rotation'");
                 p.seed = static_cast<std::uint32_t>(getInt(o["seed"], g / "seed", 0, 0xFFFFFFFF));
@@ -1156,7 +1156,7 @@ void Builder::parseGenerators(const Json& j, const Loc& at) {
             };
             checkRange(p.min, p.max, "max");
             if (vmin) checkRange(p.velocityMin, p.velocityMax, "velocity_max");
-            p.drawRotation = randomRotation(o, g);
+            p.drawRotation = drawsRotations(o, g);
             reserveBodies(static_cast<double>(p.count), g / "count");
             scene_detail::generateRandom(p, common, scene.bodies);
         }
