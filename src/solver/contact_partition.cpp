@@ -358,6 +358,7 @@ void ContactSolver::fillLanes(TaskPool& pool) {
                 const std::size_t slot =
                     std::size_t{sc.firstBatch[c]} * kBatchLanes + filled[c][c == kOverflowColor ? 0 : points]++;
                 manifoldOfLane_[slot] = k;
+                laneOfManifold_[k] = static_cast<std::uint32_t>(slot);
                 std::uint8_t& most = batchPoints_[slot / kBatchLanes];
                 most = std::max(most, static_cast<std::uint8_t>(points));
             }

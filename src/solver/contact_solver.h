@@ -164,7 +164,8 @@ public:
     void applyPseudoVelocities(MovingBodies& bodies, TaskPool& pool);
     /// Bounces: approach speeds above the threshold are reversed by the restitution coefficient.
     void applyRestitution(TaskPool& pool);
-    /// The final accumulated impulses, in manifold order, for the contact cache (in parallel over the batches).
+    /// The final accumulated impulses, in manifold order, for the contact cache: gathered batch by batch into lane
+    /// order, then copied out manifold by manifold, so that each thread writes a range of its own.
     void storeImpulses(std::vector<PointImpulse>& impulses, TaskPool& pool);
 
     /// For the contact events (src/events/): the manifold (index into the contacts of the last prepare()) in each
@@ -324,6 +325,8 @@ private:
     std::vector<ColorSpan> slabs_;
     ColorSpan large_;
     std::vector<std::uint32_t> manifoldOfLane_;  ///< batch * kLanes + lane -> manifold, ~0u for an empty lane
+    std::vector<std::uint32_t> laneOfManifold_;  ///< the inverse: manifold -> lane, ~0u for a manifold in none
+    std::vector<PointImpulse> impulsesByLane_;   ///< storeImpulses: lane * kMaxManifoldPoints + point
     std::vector<std::uint8_t> batchPoints_;      ///< per batch: the most points of its lanes' manifolds
     std::vector<ShockContact> shockOrder_;       ///< by level, then by lane
     std::vector<std::uint32_t> levelOf_;         ///< shock pass: level per solver index
