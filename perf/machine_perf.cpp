@@ -1,8 +1,8 @@
 // What the machine itself gives a second thread, on the engine's own pool: the ceiling for every 1 -> 2 thread
-// ratio the stage and scene benchmarks report. The project's machines are virtual, and their two vCPUs need not be
-// two whole cores: on a 2-vCPU AMD EPYC (Zen 5) the register-only loop below ran 1.3-1.6x faster on two threads than
-// on one, and Box3D's large_pyramid 1.2-1.5x, so a scene's scaling means something only next to these figures,
-// measured in the same sitting.
+// ratio the stage and scene benchmarks report. The project's machines are shared virtual ones, and what their two
+// vCPUs give varies with the neighbours: on a 2-vCPU AMD EPYC (Zen 5) a register-only loop like the one below ran
+// 1.3-2.1x faster on two threads than on one within the same two hours, and Box3D's large_pyramid 1.2-1.9x, so a
+// scene's scaling means something only next to these figures, measured in the same sitting.
 //
 // Compute: each worker runs independent chains of fused multiply-adds in registers, no memory touched (what the
 // solver's kernels are made of). Stream: each worker sums an array of its own, larger than the core's caches (what
