@@ -1,7 +1,8 @@
 // Multi-resolution grid broad phase: one findPairs per iteration (the whole per-step cost: level set-up, keys,
 // radix sort, gather, cells, queries) on the shared scenarios at 1k..1M boxes, and on S4-like scenes (spheres of
 // radius 0.5 fattened by their speed over one 60 Hz step) at 100k and 1M, on TaskPool(1) and TaskPool(2).
-// items_per_second counts boxes; `pairs` is the size of the candidate list.
+// items_per_second counts boxes; `pairs` is the size of the candidate list. BM_MultiResolutionGridPile: boxes piled
+// onto one point, which must cost linear time.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -68,6 +69,29 @@ void BM_MultiResolutionGridS4(benchmark::State& state) {
     run(state, bounds, static_cast<int>(state.range(1)));
 }
 
+/// Bodies piled onto one point (issue 38: a `grid` generator with spacing 0): every pair overlaps, and the search
+/// must cost time linear in the bodies under the pair budget. range(0): boxes; range(1): threads. "dropped" counts
+/// the candidates past the budget.
+void BM_MultiResolutionGridPile(benchmark::State& state) {
+    const auto n = static_cast<std::uint32_t>(state.range(0));
+    Bounds bounds;
+    bounds.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        bounds.minX[i] = bounds.minY[i] = bounds.minZ[i] = -0.5f;
+        bounds.maxX[i] = bounds.maxY[i] = bounds.maxZ[i] = 0.5f;
+    }
+    TaskPool pool(static_cast<int>(state.range(1)));
+    MultiResolutionGrid grid;
+    std::vector<BodyPair> pairs;
+    for (auto _ : state) {
+        grid.findPairs(bounds, {}, pool, pairs);
+        benchmark::DoNotOptimize(pairs.data());
+    }
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * n);
+    state.counters["pairs"] = static_cast<double>(pairs.size());
+    state.counters["dropped"] = static_cast<double>(grid.droppedPairs());
+}
+
 void gridArgs(benchmark::internal::Benchmark* b) {
     b->ArgNames({"scenario", "boxes", "threads"});
     for (const Scenario s : {Scenario::Uniform, Scenario::Clustered, Scenario::MixedSizes})
@@ -85,5 +109,10 @@ void s4Args(benchmark::internal::Benchmark* b) {
 
 BENCHMARK(BM_MultiResolutionGrid)->Apply(gridArgs);
 BENCHMARK(BM_MultiResolutionGridS4)->Apply(s4Args);
+BENCHMARK(BM_MultiResolutionGridPile)
+    ->ArgNames({"boxes", "threads"})
+    ->ArgsProduct({{4000, 16000, 64000}, {1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace

@@ -3,7 +3,8 @@
 // boxes jiggle a little between iterations, as a simulation step would move them, so the insertion path and the
 // kept order are what is measured). items_per_second counts bodies; "pairs" is the pairs found per call.
 // Uniform 1M is SAP's worst case (each box meets about n / side candidates on the swept axis), so the big sizes
-// run a fixed small number of iterations.
+// run a fixed small number of iterations. BM_SweepAndPrunePile: boxes piled onto one point, which must cost linear
+// time.
 #include <benchmark/benchmark.h>
 
 #include <cstdint>
@@ -139,7 +140,36 @@ void BM_SortPairsFewPerBody(benchmark::State& state) {
 
 }  // namespace
 
+/// Bodies piled onto one point (issue 38): every pair overlaps, and the sweep must cost time linear in the bodies
+/// under the pair budget. range(0): boxes; range(1): threads. "dropped" counts the candidates past the budget.
+void BM_SweepAndPrunePile(benchmark::State& state) {
+    const auto n = static_cast<std::uint32_t>(state.range(0));
+    Bounds bounds;
+    bounds.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        bounds.minX[i] = bounds.minY[i] = bounds.minZ[i] = -0.5f;
+        bounds.maxX[i] = bounds.maxY[i] = bounds.maxZ[i] = 0.5f;
+    }
+    std::vector<std::uint32_t> slots(n);
+    std::iota(slots.begin(), slots.end(), 0u);
+    TaskPool pool(static_cast<int>(state.range(1)));
+    SweepAndPrune sap;
+    std::vector<BodyPair> out;
+    for (auto _ : state) {
+        sap.findPairs(bounds, slots.data(), n, {}, pool, out);
+        benchmark::DoNotOptimize(out.data());
+    }
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * n);
+    state.counters["pairs"] = static_cast<double>(out.size());
+    state.counters["dropped"] = static_cast<double>(sap.droppedPairs());
+}
+
 BENCHMARK(BM_SweepAndPrune)->Apply(sapArgs)->Unit(benchmark::kMillisecond)->MinTime(0.2)->UseRealTime();
+BENCHMARK(BM_SweepAndPrunePile)
+    ->ArgNames({"boxes", "threads"})
+    ->ArgsProduct({{4000, 16000, 64000}, {1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_RadixSortFloatKeys)
     ->ArgsProduct({{1'000'000}, {1, 2}})
     ->Unit(benchmark::kMillisecond)

@@ -29,8 +29,11 @@ inline constexpr std::uint64_t kMaxMeshTriangles = std::uint64_t{1} << 24;  ///<
 // The step.
 /// Candidate pairs of moving bodies: each chunk of the broad phase's search keeps at most kPairsPerBody times its
 /// share of the bodies, and at least kMinChunkPairs; pairs past that are dropped and counted (Profile::droppedPairs).
+/// Once a chunk has kept its share, each body's search in it stops after meeting kSearchOverlapsPerBody overlapping
+/// boxes (those the filter rejects included), and what it leaves untested is counted as dropped.
 inline constexpr std::size_t kPairsPerBody = 32;
 inline constexpr std::size_t kMinChunkPairs = 16384;
+inline constexpr std::size_t kSearchOverlapsPerBody = 256;
 /// Static candidates near moving bodies (static bodies and mesh or heightfield triangles in each body's query box):
 /// each chunk of the static query keeps at most kStaticHitsPerBody times its bodies, and at least
 /// kMinChunkStaticHits; the rest are dropped and counted (Profile::droppedStaticHits).

@@ -44,8 +44,9 @@ struct Profile {
     std::uint32_t frozenCount = 0;  ///< bodies frozen in this step: state non-finite, or leaving the coordinate limit
     BroadPhaseKind broadPhase = BroadPhaseKind::Auto;  ///< algorithm that found the moving pairs (Auto: none ran)
     std::uint32_t movingPairs = 0;                     ///< candidate pairs of two moving bodies
-    /// Candidate pairs of two moving bodies found past the pair budget and dropped (docs/limits.md: bodies piled onto
-    /// one point); 0 in any scene the budget is meant for. The runner warns when it is not.
+    /// Candidate pairs of two moving bodies past the pair budget, dropped or left untested (docs/limits.md: bodies
+    /// piled onto one point; an upper bound on the overlaps lost); 0 in any scene the budget is meant for. The
+    /// runner warns when it is not.
     std::uint64_t droppedPairs = 0;
     /// Static bodies and mesh triangles near moving bodies past the static budget and dropped (docs/limits.md: static
     /// bodies piled onto one point); 0 in any scene the budget is meant for. The runner warns when it is not.

@@ -70,29 +70,57 @@ struct PairFilter {
 /// The pair budget (docs/limits.md): a search splits its work into chunks that depend on the body count only, and
 /// each chunk keeps at most its cap of pairs; pairs past it are counted, not kept. So memory stays bounded (about
 /// 2 x kPairsPerBody pairs a body) when bodies pile onto one point, and what is kept does not depend on the threads.
+/// Time stays bounded too: once its chunk's cap is full, a body's search stops after meeting overlapsPerBody
+/// overlapping boxes and counts the candidates it leaves untested as dropped, so a pile of n bodies at one point
+/// costs time linear in n rather than n^2 / 2 tests. Until the cap is full every search is exact, however many
+/// boxes one body overlaps (a platform under a thousand crates). A chunk that overflowed searches again with its
+/// cap shared evenly among its bodies (ChunkPairs::keepPerBody).
 struct PairBudget {
     std::size_t perBody = limits::kPairsPerBody;
     std::size_t minPerChunk = limits::kMinChunkPairs;
+    std::size_t overlapsPerBody = limits::kSearchOverlapsPerBody;
 
     /// For tests that check a search against brute force on piles no world would hold.
-    static PairBudget unlimited() { return {SIZE_MAX / (std::size_t{1} << 32), SIZE_MAX / (std::size_t{1} << 32)}; }
+    static PairBudget unlimited() {
+        constexpr std::size_t kHuge = SIZE_MAX / (std::size_t{1} << 32);
+        return {kHuge, kHuge, kHuge};
+    }
     std::size_t chunkCap(std::size_t bodies, std::size_t chunks) const {
         const std::size_t share = chunks > 0 ? bodies * perBody / chunks : 0;
         return std::max(share, minPerChunk);
     }
 };
 
-/// One chunk's pairs under the budget.
+/// One chunk's pairs under the budget, and the search of the body it is at. A chunk first searches exactly; if it
+/// overflows its cap, it searches again with the cap shared evenly among its bodies (`keepPerBody`), so that the pairs
+/// of a pile spread over its bodies instead of tying the first few to all the others.
 struct ChunkPairs {
     std::vector<BodyPair>& pairs;
     std::size_t cap;
+    std::size_t overlapsPerBody;
+    /// The pairs one body's search keeps once the chunk has overflowed (else no limit).
+    std::size_t keepPerBody = SIZE_MAX;
+    /// Pairs past the chunk's cap or a body's share of it, and candidates left untested past them.
     std::uint64_t dropped = 0;
+    std::size_t bodyOverlaps = 0;  ///< overlapping boxes the current body's search met
+    std::size_t bodyKept = 0;      ///< pairs it kept
 
-    void add(BodyPair p) {
-        if (pairs.size() < cap)
+    void startBody() { bodyOverlaps = bodyKept = 0; }
+    /// The current body has met its share of overlaps and can keep no more pairs: the caller skips the rest.
+    bool bodyDone() const {
+        return bodyOverlaps >= overlapsPerBody && (pairs.size() >= cap || bodyKept >= keepPerBody);
+    }
+    void skip(std::uint64_t candidates) { dropped += candidates; }
+    /// An overlapping box the current body met; `accepted`: the filter lets the pair become a contact.
+    void add(BodyPair p, bool accepted) {
+        ++bodyOverlaps;
+        if (!accepted) return;
+        if (pairs.size() < cap && bodyKept < keepPerBody) {
             pairs.push_back(p);
-        else
+            ++bodyKept;
+        } else {
             ++dropped;
+        }
     }
 };
 
@@ -103,7 +131,7 @@ struct CandidatePairs {
     std::vector<BodyPair> statics;
     std::vector<MeshPair> meshes;  ///< ordered by (moving, static body slot)
     std::vector<std::uint32_t> meshTriangles;
-    /// Moving pairs found past the pair budget and not kept (docs/limits.md); 0 in any sane scene.
+    /// Moving pairs past the pair budget, not kept or not tested (docs/limits.md); 0 in any sane scene.
     std::uint64_t droppedMoving = 0;
     /// Static candidates past the static budget and not kept (docs/limits.md); 0 in any sane scene.
     std::uint64_t droppedStatic = 0;

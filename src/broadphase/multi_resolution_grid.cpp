@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <tuple>
 
 #include "core/parallel.h"
 #include "simd/simd.h"
@@ -72,12 +73,20 @@ struct SortedView {
 /// Calls hit(j) for every slot j in [j0, j1) whose box overlaps slot i's, ascending. One SIMD batch of candidates
 /// per step; the arrays are padded by a batch so the last load stays in bounds, and lanes past j1 are masked off.
 /// With a row's x cells `slotX` (ascending in [j0, j1)), stops after the first batch that reaches past x cell xHi:
-/// later slots of the row lie further right and cannot be neighbours.
+/// later slots of the row lie further right and cannot be neighbours. Once slot i's search has spent its budget
+/// (`pairs`), the candidates left are counted as dropped, not tested.
 template <class Hit>
 inline void forOverlapping(const SortedView& s, std::uint32_t i, std::uint32_t j0, std::uint32_t j1,
-                           const std::uint32_t* slotX, std::uint32_t xHi, const simd::FloatW& laneIndex, Hit&& hit) {
+                           const std::uint32_t* slotX, std::uint32_t xHi, const simd::FloatW& laneIndex,
+                           ChunkPairs& pairs, Hit&& hit) {
     using simd::FloatW;
+    const auto skipFrom = [&](std::uint32_t j) {
+        const std::uint32_t end =
+            slotX != nullptr ? static_cast<std::uint32_t>(std::upper_bound(slotX + j, slotX + j1, xHi) - slotX) : j1;
+        pairs.skip(end - j);
+    };
     if (j0 >= j1) return;
+    if (pairs.bodyDone()) return skipFrom(j0);
     const FloatW aMinX(s.minX[i]), aMinY(s.minY[i]), aMinZ(s.minZ[i]);
     const FloatW aMaxX(s.maxX[i]), aMaxY(s.maxY[i]), aMaxZ(s.maxZ[i]);
     for (std::uint32_t j = j0;; j += static_cast<std::uint32_t>(simd::kLanes)) {
@@ -91,6 +100,7 @@ inline void forOverlapping(const SortedView& s, std::uint32_t i, std::uint32_t j
             m, simd::andMask(aMinZ <= simd::load<FloatW>(s.maxZ + j), simd::load<FloatW>(s.minZ + j) <= aMaxZ));
         simd::forEachSetLane(m, [&](std::size_t k) { hit(j + static_cast<std::uint32_t>(k)); });
         if (j1 - j <= simd::kLanes || (slotX != nullptr && slotX[j + simd::kLanes - 1] > xHi)) return;
+        if (pairs.bodyDone()) return skipFrom(j + static_cast<std::uint32_t>(simd::kLanes));
     }
 }
 
@@ -434,121 +444,146 @@ void MultiResolutionGrid::queryRows(const Layout& layout, const PairFilter& filt
     const std::size_t cap = budget_.chunkCap(slotBody_.size(), chunkOutputs_.size());
     pool.forChunks(rows, chunkSize, [&](std::size_t chunk, std::size_t rBegin, std::size_t rEnd, int) {
         ChunkOutput& out = chunkOutputs_[chunk];
-        out.pairs.clear();
-        ChunkPairs pairs{out.pairs, cap};
-        const simd::FloatW laneIndex = simd::laneIndices<simd::FloatW>();
-        auto emit = [&](std::uint32_t i, std::uint32_t j) {
-            std::uint32_t a = view.body[i], b = view.body[j];
-            if (a > b) std::swap(a, b);
-            if (filter.accepts(a, b)) pairs.add({a, b});
-        };
-        // First row not below the current row's z + 1 window; the window only moves forward as rows are walked in
-        // key order, so the cursor sweeps its part of the array once.
-        std::uint32_t cursor = kNoCell;
-        for (auto r = static_cast<std::uint32_t>(rBegin); r < rEnd; ++r) {
-            const std::uint64_t rk = rowKey[r];
-            const int level = static_cast<int>(rk >> (2 * axisBits));
-            const auto y = static_cast<std::uint32_t>(rk) & maxCoord;
-            const auto z = static_cast<std::uint32_t>(rk >> axisBits) & maxCoord;
-            const std::uint32_t b = rowBegin[r], e = rowBegin[r + 1];
-
-            // The y + 1 row directly follows in key order when it exists.
-            const bool hasNext = y < maxCoord && rowKey[r + 1] == rk + 1;
-            const std::uint32_t nextEnd = hasNext ? rowBegin[r + 2] : e;
-            // The z + 1 rows y - 1 .. y + 1 have consecutive keys: at most three rows from the cursor on, one run of
-            // slots.
-            std::uint32_t g0 = r, gRows = 0;
-            if (z < maxCoord) {
-                const std::uint64_t lo = rk + zStep - (y > 0 ? 1 : 0);
-                const std::uint64_t hi = rk + zStep + (y < maxCoord ? 1 : 0);
-                std::uint32_t at = cursor;
-                if (at == kNoCell) {
-                    at = static_cast<std::uint32_t>(std::lower_bound(rowKey + r, rowKey + rows, lo) - rowKey);
-                } else {
-                    // The window moves about one row per row, so step without branches (an exit branch per step
-                    // mispredicts nearly every time) and loop only for the rare long jump; the sentinels stop it.
-                    do {
-                        at += static_cast<std::uint32_t>(rowKey[at] < lo);
-                        at += static_cast<std::uint32_t>(rowKey[at] < lo);
-                        at += static_cast<std::uint32_t>(rowKey[at] < lo);
-                    } while (rowKey[at] < lo);
-                }
-                cursor = at;
-                g0 = at;
-                gRows = static_cast<std::uint32_t>(rowKey[at] <= hi) +
-                        static_cast<std::uint32_t>(rowKey[at + 1] <= hi) +
-                        static_cast<std::uint32_t>(rowKey[at + 2] <= hi);
-            }
-            const std::uint32_t gBegin = rowBegin[g0], gEnd = rowBegin[g0 + gRows];
-            // A run no longer than one batch per row it spans is cheapest tested whole: the exact test discards the
-            // cells outside x - 1 .. x + 1. Longer runs go row by row through x windows.
-            const bool groupWhole = gEnd - gBegin <= lanes * gRows;
-            // x windows: the first slot of each forward row that can still be a neighbour (x >= current x - 1).
-            std::uint32_t nextAt = e;
-            std::uint32_t gAt[3] = {gBegin, rowBegin[g0 + 1], rowBegin[g0 + 2]};
-            std::uint32_t gTo[3] = {rowBegin[g0 + 1], rowBegin[g0 + 2], rowBegin[g0 + 3]};
-            auto windowed = [&](std::uint32_t i, std::uint32_t& at, std::uint32_t to, std::uint32_t xi) {
-                while (to - at > lanes && slotX[at] + 1 < xi) ++at;
-                forOverlapping(view, i, at, to, slotX, xi + 1, laneIndex, [&](std::uint32_t j) { emit(i, j); });
+        const auto searchRows = [&](ChunkPairs& pairs) {
+            const simd::FloatW laneIndex = simd::laneIndices<simd::FloatW>();
+            auto emit = [&](std::uint32_t i, std::uint32_t j) {
+                std::uint32_t a = view.body[i], b = view.body[j];
+                if (a > b) std::swap(a, b);
+                pairs.add({a, b}, filter.accepts(a, b));
             };
-            for (std::uint32_t i = b; i < e; ++i) {
-                const std::uint32_t xi = slotX[i];
-                if (hasNext && nextEnd - (i + 1) <= lanes) {
-                    forOverlapping(view, i, i + 1, nextEnd, nullptr, 0, laneIndex,
-                                   [&](std::uint32_t j) { emit(i, j); });
-                } else {
-                    // Own row: later slots only, up to x + 1 (earlier ones found this pair already).
-                    forOverlapping(view, i, i + 1, e, slotX, xi + 1, laneIndex, [&](std::uint32_t j) { emit(i, j); });
-                    if (hasNext) windowed(i, nextAt, nextEnd, xi);
-                }
-                if (groupWhole) {
-                    forOverlapping(view, i, gBegin, gEnd, nullptr, 0, laneIndex, [&](std::uint32_t j) { emit(i, j); });
-                } else {
-                    for (std::uint32_t k = 0; k < gRows; ++k) windowed(i, gAt[k], gTo[k], xi);
-                }
-            }
+            const auto search = [&](std::uint32_t i, std::uint32_t j0, std::uint32_t j1, const std::uint32_t* x,
+                                    std::uint32_t xHi) {
+                forOverlapping(view, i, j0, j1, x, xHi, laneIndex, pairs, [&](std::uint32_t j) { emit(i, j); });
+            };
+            // What each body of the row met and kept in its own level, carried into its search of the coarser levels.
+            std::vector<std::pair<std::size_t, std::size_t>>& spent = out.spent;
+            // First row not below the current row's z + 1 window; the window only moves forward as rows are walked in
+            // key order, so the cursor sweeps its part of the array once.
+            std::uint32_t cursor = kNoCell;
+            for (auto r = static_cast<std::uint32_t>(rBegin); r < rEnd; ++r) {
+                const std::uint64_t rk = rowKey[r];
+                const int level = static_cast<int>(rk >> (2 * axisBits));
+                const auto y = static_cast<std::uint32_t>(rk) & maxCoord;
+                const auto z = static_cast<std::uint32_t>(rk >> axisBits) & maxCoord;
+                const std::uint32_t b = rowBegin[r], e = rowBegin[r + 1];
 
-            // Coarser levels: a coarse body's extent is at most its level's size and its centre is in its cell, so
-            // it can only touch a fine cell's bodies if its centre lies within half a coarse cell of their union box.
-            if (level >= topLevel) continue;
-            for (std::uint32_t cb = b; cb < e;) {
-                std::uint32_t ce = cb + 1;
-                while (ce < e && slotX[ce] == slotX[cb]) ++ce;
-                float lo[3] = {view.minX[cb], view.minY[cb], view.minZ[cb]};
-                float hi[3] = {view.maxX[cb], view.maxY[cb], view.maxZ[cb]};
-                for (std::uint32_t i = cb + 1; i < ce; ++i) {
-                    lo[0] = std::min(lo[0], view.minX[i]), hi[0] = std::max(hi[0], view.maxX[i]);
-                    lo[1] = std::min(lo[1], view.minY[i]), hi[1] = std::max(hi[1], view.maxY[i]);
-                    lo[2] = std::min(lo[2], view.minZ[i]), hi[2] = std::max(hi[2], view.maxZ[i]);
-                }
-                double uMin[3], uMax[3];
-                for (int a = 0; a < 3; ++a) uMin[a] = lo[a] - origin_[a], uMax[a] = hi[a] - origin_[a];
-                for (int li = 0; li < occupiedLevelCount_; ++li) {
-                    const int coarse = occupiedLevels_[li];
-                    if (coarse <= level) continue;
-                    const double inv = levelInvBin_[coarse];
-                    std::uint32_t qLo[3], qHi[3];
-                    for (int a = 0; a < 3; ++a) {
-                        qLo[a] = layout.cell(uMin[a] * inv - 0.5 - kQuerySlack);
-                        qHi[a] = layout.cell(uMax[a] * inv + 0.5 + kQuerySlack);
+                // The y + 1 row directly follows in key order when it exists.
+                const bool hasNext = y < maxCoord && rowKey[r + 1] == rk + 1;
+                const std::uint32_t nextEnd = hasNext ? rowBegin[r + 2] : e;
+                // The z + 1 rows y - 1 .. y + 1 have consecutive keys: at most three rows from the cursor on, one run
+                // of slots.
+                std::uint32_t g0 = r, gRows = 0;
+                if (z < maxCoord) {
+                    const std::uint64_t lo = rk + zStep - (y > 0 ? 1 : 0);
+                    const std::uint64_t hi = rk + zStep + (y < maxCoord ? 1 : 0);
+                    std::uint32_t at = cursor;
+                    if (at == kNoCell) {
+                        at = static_cast<std::uint32_t>(std::lower_bound(rowKey + r, rowKey + rows, lo) - rowKey);
+                    } else {
+                        // The window moves about one row per row, so step without branches (an exit branch per step
+                        // mispredicts nearly every time) and loop only for the rare long jump; the sentinels stop it.
+                        do {
+                            at += static_cast<std::uint32_t>(rowKey[at] < lo);
+                            at += static_cast<std::uint32_t>(rowKey[at] < lo);
+                            at += static_cast<std::uint32_t>(rowKey[at] < lo);
+                        } while (rowKey[at] < lo);
                     }
-                    for (std::uint32_t qz = qLo[2]; qz <= qHi[2]; ++qz)
-                        for (std::uint32_t qy = qLo[1]; qy <= qHi[1]; ++qy)
-                            for (std::uint32_t qx = qLo[0]; qx <= qHi[0]; ++qx) {
-                                const std::uint64_t probe = layout.pack(coarse, qx, qy, qz);
-                                std::uint64_t h = (probe * 0x9E3779B97F4A7C15ull) >> tableShift_;
-                                while (tableKey_[h] != probe && tableKey_[h] != kEmptySlot) h = (h + 1) & tableMask_;
-                                if (tableKey_[h] == kEmptySlot) continue;
-                                const std::uint32_t jb = tableCell_[2 * h], je = tableCell_[2 * h + 1];
-                                for (std::uint32_t i = cb; i < ce; ++i)
-                                    forOverlapping(view, i, jb, je, nullptr, 0, laneIndex,
-                                                   [&](std::uint32_t j) { emit(i, j); });
-                            }
+                    cursor = at;
+                    g0 = at;
+                    gRows = static_cast<std::uint32_t>(rowKey[at] <= hi) +
+                            static_cast<std::uint32_t>(rowKey[at + 1] <= hi) +
+                            static_cast<std::uint32_t>(rowKey[at + 2] <= hi);
                 }
-                cb = ce;
+                const std::uint32_t gBegin = rowBegin[g0], gEnd = rowBegin[g0 + gRows];
+                // A run no longer than one batch per row it spans is cheapest tested whole: the exact test discards the
+                // cells outside x - 1 .. x + 1. Longer runs go row by row through x windows.
+                const bool groupWhole = gEnd - gBegin <= lanes * gRows;
+                // x windows: the first slot of each forward row that can still be a neighbour (x >= current x - 1).
+                std::uint32_t nextAt = e;
+                std::uint32_t gAt[3] = {gBegin, rowBegin[g0 + 1], rowBegin[g0 + 2]};
+                std::uint32_t gTo[3] = {rowBegin[g0 + 1], rowBegin[g0 + 2], rowBegin[g0 + 3]};
+                auto windowed = [&](std::uint32_t i, std::uint32_t& at, std::uint32_t to, std::uint32_t xi) {
+                    while (to - at > lanes && slotX[at] + 1 < xi) ++at;
+                    search(i, at, to, slotX, xi + 1);
+                };
+                const bool coarser = level < topLevel;
+                if (coarser) spent.resize(e - b);
+                for (std::uint32_t i = b; i < e; ++i) {
+                    const std::uint32_t xi = slotX[i];
+                    pairs.startBody();
+                    if (hasNext && nextEnd - (i + 1) <= lanes) {
+                        search(i, i + 1, nextEnd, nullptr, 0);
+                    } else {
+                        // Own row: later slots only, up to x + 1 (earlier ones found this pair already).
+                        search(i, i + 1, e, slotX, xi + 1);
+                        if (hasNext) windowed(i, nextAt, nextEnd, xi);
+                    }
+                    if (groupWhole) {
+                        search(i, gBegin, gEnd, nullptr, 0);
+                    } else {
+                        for (std::uint32_t k = 0; k < gRows; ++k) windowed(i, gAt[k], gTo[k], xi);
+                    }
+                    if (coarser) spent[i - b] = {pairs.bodyOverlaps, pairs.bodyKept};
+                }
+
+                // Coarser levels: a coarse body's extent is at most its level's size and its centre is in its cell, so
+                // it can only touch a fine cell's bodies if its centre lies within half a coarse cell of their union
+                // box.
+                if (!coarser) continue;
+                for (std::uint32_t cb = b; cb < e;) {
+                    std::uint32_t ce = cb + 1;
+                    while (ce < e && slotX[ce] == slotX[cb]) ++ce;
+                    float lo[3] = {view.minX[cb], view.minY[cb], view.minZ[cb]};
+                    float hi[3] = {view.maxX[cb], view.maxY[cb], view.maxZ[cb]};
+                    for (std::uint32_t i = cb + 1; i < ce; ++i) {
+                        lo[0] = std::min(lo[0], view.minX[i]), hi[0] = std::max(hi[0], view.maxX[i]);
+                        lo[1] = std::min(lo[1], view.minY[i]), hi[1] = std::max(hi[1], view.maxY[i]);
+                        lo[2] = std::min(lo[2], view.minZ[i]), hi[2] = std::max(hi[2], view.maxZ[i]);
+                    }
+                    double uMin[3], uMax[3];
+                    for (int a = 0; a < 3; ++a) uMin[a] = lo[a] - origin_[a], uMax[a] = hi[a] - origin_[a];
+                    // The coarse cells' slot ranges first, so that each body then searches them all under its budget.
+                    std::vector<std::pair<std::uint32_t, std::uint32_t>>& ranges = out.coarseRanges;
+                    ranges.clear();
+                    for (int li = 0; li < occupiedLevelCount_; ++li) {
+                        const int coarse = occupiedLevels_[li];
+                        if (coarse <= level) continue;
+                        const double inv = levelInvBin_[coarse];
+                        std::uint32_t qLo[3], qHi[3];
+                        for (int a = 0; a < 3; ++a) {
+                            qLo[a] = layout.cell(uMin[a] * inv - 0.5 - kQuerySlack);
+                            qHi[a] = layout.cell(uMax[a] * inv + 0.5 + kQuerySlack);
+                        }
+                        for (std::uint32_t qz = qLo[2]; qz <= qHi[2]; ++qz)
+                            for (std::uint32_t qy = qLo[1]; qy <= qHi[1]; ++qy)
+                                for (std::uint32_t qx = qLo[0]; qx <= qHi[0]; ++qx) {
+                                    const std::uint64_t probe = layout.pack(coarse, qx, qy, qz);
+                                    std::uint64_t h = (probe * 0x9E3779B97F4A7C15ull) >> tableShift_;
+                                    while (tableKey_[h] != probe && tableKey_[h] != kEmptySlot)
+                                        h = (h + 1) & tableMask_;
+                                    if (tableKey_[h] == kEmptySlot) continue;
+                                    ranges.emplace_back(tableCell_[2 * h], tableCell_[2 * h + 1]);
+                                }
+                    }
+                    for (std::uint32_t i = cb; i < ce; ++i) {
+                        std::tie(pairs.bodyOverlaps, pairs.bodyKept) = spent[i - b];
+                        for (const auto& [jb, je] : ranges) search(i, jb, je, nullptr, 0);
+                    }
+                    cb = ce;
+                }
             }
-        }
-        out.dropped = pairs.dropped;
+        };
+        out.pairs.clear();
+        ChunkPairs exact{out.pairs, cap, budget_.overlapsPerBody};
+        searchRows(exact);
+        out.dropped = exact.dropped;
+        if (exact.dropped == 0) return;
+        // Past the budget: search again with the cap shared evenly, so that a pile's pairs spread over its bodies.
+        out.pairs.clear();
+        const std::size_t bodies = rowBegin[rEnd] - rowBegin[rBegin];
+        ChunkPairs shared{out.pairs, cap, budget_.overlapsPerBody, std::max<std::size_t>(1, cap / bodies)};
+        searchRows(shared);
+        out.dropped = shared.dropped;
     });
 }
 

@@ -123,6 +123,10 @@ private:
     struct ChunkOutput {
         std::vector<BodyPair> pairs;
         std::uint64_t dropped = 0;
+        // Scratch of the coarse-level search: what a row's bodies met and kept in their own level (overlaps, pairs),
+        // a cell's ranges.
+        std::vector<std::pair<std::size_t, std::size_t>> spent;
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> coarseRanges;
     };
     /// Cell starts of one chunk of slots, for the cell statistics: runs that straddle chunks are joined afterwards.
     struct CellRuns {

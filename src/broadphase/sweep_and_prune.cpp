@@ -86,6 +86,7 @@ void produceCompacted(std::size_t count, TaskPool& pool, std::uint64_t* tmp, std
 struct SortedBoxes {
     const float *axisMin, *axisMax, *uMin, *uMax, *vMin, *vMax;
     const std::uint32_t* dense;
+    std::size_t count;
 };
 
 // The lanes of a mask as bits (lane k at bit k), from the one-bool-per-lane form simd/ offers: eight 0/1 bytes
@@ -121,7 +122,7 @@ template <class M>
     for (std::uint32_t bits = laneBits(hit); bits != 0; bits &= bits - 1) {
         const std::uint32_t dq = dense[std::countr_zero(bits)];
         const BodyPair pair{std::min(dp, dq), std::max(dp, dq)};
-        if (filter.accepts(pair.a, pair.b)) pairs.add(pair);
+        pairs.add(pair, filter.accepts(pair.a, pair.b));
     }
 }
 
@@ -150,6 +151,7 @@ void sweepRange(const SortedBoxes& boxes, std::size_t begin, std::size_t end, co
         const F uMinP = simd::broadcast<F>(uMin[p]), uMaxP = simd::broadcast<F>(uMax[p]);
         const F vMinP = simd::broadcast<F>(vMin[p]), vMaxP = simd::broadcast<F>(vMax[p]);
         const std::uint32_t dp = dense[p];
+        pairs.startBody();
         std::size_t q = (p + 1) / L * L;
         // Lanes of the first block that lie after p (all of them when p + 1 starts a block).
         const auto afterP = lanes > simd::broadcast<F>(static_cast<float>(p + 1 - q) - 1.0f);
@@ -162,7 +164,17 @@ void sweepRange(const SortedBoxes& boxes, std::size_t begin, std::size_t end, co
                                      simd::andMask(vMinQ <= vMaxP, vMinP <= vMaxQ));
             if (!full) hit = simd::andMask(hit, simd::load<F>(axisMin + q) <= maxPW);
             if (q <= p) hit = simd::andMask(hit, afterP);
-            if (simd::any(hit)) emitHits(hit, dense + q, dp, filter, pairs);
+            if (simd::any(hit)) {
+                emitHits(hit, dense + q, dp, filter, pairs);
+                if (pairs.bodyDone() && full) {
+                    // A pile: the boxes still in the swept range go untested (counted as dropped).
+                    const float* rangeEnd =
+                        std::upper_bound(axisMin + q + L, axisMin + std::max(boxes.count, q + L), maxP,
+                                         [](float value, float min) { return !(min <= value); });
+                    pairs.skip(static_cast<std::uint64_t>(rangeEnd - (axisMin + q + L)));
+                    break;
+                }
+            }
             if (!full) break;
         }
     }
@@ -386,21 +398,28 @@ void SweepAndPrune::gatherSorted(const Bounds& bounds, TaskPool& pool) {
 
 void SweepAndPrune::sweep(const PairFilter& filter, TaskPool& pool, std::vector<BodyPair>& out) {
     const std::size_t n = items_.size();
-    const SortedBoxes s{axisMin_.data(), axisMax_.data(), uMin_.data(),         uMax_.data(),
-                        vMin_.data(),    vMax_.data(),    denseOfSorted_.data()};
+    const SortedBoxes s{axisMin_.data(), axisMax_.data(), uMin_.data(),          uMax_.data(),
+                        vMin_.data(),    vMax_.data(),    denseOfSorted_.data(), n};
     const std::size_t chunkSize = sweepChunkFor(n);
     const std::size_t chunks = TaskPool::chunkCount(n, chunkSize);
     if (chunkPairs_.size() < chunks) chunkPairs_.resize(chunks);  // never shrinks: the vectors keep their capacity
     chunkDropped_.assign(chunks, 0);
     const std::size_t cap = budget_.chunkCap(n, chunks);
     pool.forChunks(n, chunkSize, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
-        chunkPairs_[c].clear();
-        ChunkPairs pairs{chunkPairs_[c], cap};
-        if (scalarKernel_)
-            sweepRange<float>(s, begin, end, filter, pairs);
-        else
-            sweepRange<simd::FloatW>(s, begin, end, filter, pairs);
-        chunkDropped_[c] = pairs.dropped;
+        const auto sweepChunk = [&](ChunkPairs& pairs) {
+            chunkPairs_[c].clear();
+            if (scalarKernel_)
+                sweepRange<float>(s, begin, end, filter, pairs);
+            else
+                sweepRange<simd::FloatW>(s, begin, end, filter, pairs);
+            chunkDropped_[c] = pairs.dropped;
+        };
+        ChunkPairs exact{chunkPairs_[c], cap, budget_.overlapsPerBody};
+        sweepChunk(exact);
+        if (exact.dropped == 0) return;
+        // Past the budget: sweep again with the cap shared evenly, so that a pile's pairs spread over its bodies.
+        ChunkPairs shared{chunkPairs_[c], cap, budget_.overlapsPerBody, std::max<std::size_t>(1, cap / (end - begin))};
+        sweepChunk(shared);
     });
     droppedPairs_ = 0;
     for (const std::uint64_t d : chunkDropped_) droppedPairs_ += d;

@@ -5,12 +5,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <optional>
 #include <random>
 #include <tuple>
 
 #include "bounds/bounds.h"
 #include "broadphase/broadphase_stage.h"
+#include "broadphase/multi_resolution_grid.h"
+#include "broadphase/sweep_and_prune.h"
 #include "core/parallel.h"
 #include "rubble/limits.h"
 #include "rubble/world.h"
@@ -356,6 +359,67 @@ TEST(PairBudget, BodiesPiledOnOnePointDegradeWithinTheBudgetAndSanePilesDropNoth
         // 3 x 19 x 20^2 along the axes, 6 x 19^2 x 20 along face diagonals, 4 x 19^3 along body diagonals.
         EXPECT_EQ(world.lastProfile().movingPairs, 93556u) << broadPhaseName(kind);
     }
+}
+
+// The pair budget in time (issue 38): a pile at one point must not cost n^2 / 2 tests. Once a chunk's cap is full,
+// each body's search stops after kSearchOverlapsPerBody overlaps and counts what it leaves untested, so every pair
+// of the pile is still kept or counted, the same on one and two threads; and the chunk searches again with its cap
+// shared among its bodies, so that the kept pairs spread over the pile (each body in at least kPairsPerBody of them,
+// none in a tenth of the pile) rather than tying the first bodies to all the others. Small and 20x larger boxes share
+// the point, so the grid's search of coarser levels carries what each body met and kept in its own level. And a sane
+// scene in which one body overlaps far more boxes than kSearchOverlapsPerBody (a platform under 1,936 crates, which
+// SAP's sweep finds from the platform's side) keeps every pair: the search is exact until the budget is spent.
+TEST(PairBudget, APileAtOnePointCostsLinearTimeAndAPlatformKeepsEveryCrate) {
+    const auto bothAlgorithms = [](const Bounds& boxes, int threads) {
+        const std::uint32_t n = boxes.size();
+        std::vector<std::uint32_t> slots(n);
+        std::iota(slots.begin(), slots.end(), 0u);
+        TaskPool pool(threads);
+        SweepAndPrune sap;
+        MultiResolutionGrid grid;
+        std::vector<BodyPair> fromSap, fromGrid;
+        sap.findPairs(boxes, slots.data(), n, {}, pool, fromSap);
+        grid.findPairs(boxes, {}, pool, fromGrid);
+        std::sort(fromSap.begin(), fromSap.end());
+        std::sort(fromGrid.begin(), fromGrid.end());
+        return std::tuple{fromSap, sap.droppedPairs(), fromGrid, grid.droppedPairs()};
+    };
+
+    constexpr std::uint32_t kSmall = 3000, kLarge = 3000, n = kSmall + kLarge;
+    Bounds pile;
+    pile.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const float half = i < kSmall ? 0.5f : 10.0f;
+        pile.minX[i] = pile.minY[i] = pile.minZ[i] = -half;
+        pile.maxX[i] = pile.maxY[i] = pile.maxZ[i] = half;
+    }
+    const auto one = bothAlgorithms(pile, 1);
+    const auto& [sapPairs, sapDropped, gridPairs, gridDropped] = one;
+    for (const auto& [name, pairs, dropped] :
+         {std::tuple{"sap", &sapPairs, sapDropped}, std::tuple{"grid", &gridPairs, gridDropped}}) {
+        EXPECT_EQ(pairs->size() + dropped, std::uint64_t{n} * (n - 1) / 2) << name << ": every pair kept or counted";
+        std::vector<std::uint32_t> pairsOf(n, 0);
+        for (const BodyPair& p : *pairs) ++pairsOf[p.a], ++pairsOf[p.b];
+        const auto [fewest, most] = std::minmax_element(pairsOf.begin(), pairsOf.end());
+        EXPECT_GE(*fewest, limits::kPairsPerBody) << name;
+        EXPECT_LE(*most, n / 10) << name << ": no body holds a large part of the pile";
+    }
+    EXPECT_EQ(bothAlgorithms(pile, 2), one) << "what is kept and counted does not depend on the threads";
+
+    Bounds platform;
+    const auto push = [&](float x, float y, float z, float hx, float hy, float hz) {
+        platform.minX.push_back(x - hx), platform.minY.push_back(y - hy), platform.minZ.push_back(z - hz);
+        platform.maxX.push_back(x + hx), platform.maxY.push_back(y + hy), platform.maxZ.push_back(z + hz);
+    };
+    push(0, 0, 0, 10, 0.5f, 10);
+    for (int i = 0; i < 44; ++i)
+        for (int j = 0; j < 44; ++j) push(-9.7f + 0.45f * i, 0.69f, -9.7f + 0.45f * j, 0.2f, 0.2f, 0.2f);
+    std::vector<BodyPair> expected;
+    for (std::uint32_t j = 1; j < platform.size(); ++j) expected.push_back({0, j});
+    const auto [onSap, droppedSap, onGrid, droppedGrid] = bothAlgorithms(platform, 2);
+    EXPECT_EQ(onSap, expected);
+    EXPECT_EQ(onGrid, expected);
+    EXPECT_EQ(droppedSap + droppedGrid, 0u);
 }
 
 // The static budget (docs/limits.md): 70,000 static balls created at one point hand a ball dropped into them 70,000
