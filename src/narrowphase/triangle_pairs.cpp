@@ -7,6 +7,8 @@
 #include <vector>
 
 #include "narrowphase/clip.h"
+#include "narrowphase/closest_points_contact.h"
+#include "narrowphase/gjk.h"
 #include "narrowphase/hull_pairs.h"
 #include "shapes/shape.h"
 #include "simd/simd.h"
@@ -104,6 +106,10 @@ TrianglePoint closestOnTriangle(Vec3 p, Vec3 a, Vec3 b, Vec3 c) {
     const float denom = 1.0f / (va + vb + vc);
     return {a + ab * (vb * denom) + ac * (vc * denom), kFeatureFace};
 }
+
+/// Whether closest-segment parameters lie at an end of either segment: the segments' closest points are then not
+/// the shapes' closest points in general (an edge pair's axis gives their distance only inside both edges).
+bool clampedToAnEnd(float s, float t) { return s <= 0 || s >= 1 || t <= 0 || t >= 1; }
 
 /// Closest points of segments p1 + s d1 and p2 + t d2, s, t in [0, 1] (Ericson, RTCD 5.1.9).
 void closestSegments(Vec3 p1, Vec3 d1, Vec3 p2, Vec3 d2, float& s, float& t) {
@@ -232,6 +238,53 @@ int emitReduced(const Candidates& c, Vec3 n, const TriangleBox& box, Manifold& o
         addPoint(out, box.toWorld * c.position[chosen[i]] + box.pose.position, c.depth[chosen[i]],
                  c.feature[chosen[i]]);
     return out.pointCount;
+}
+
+/// What a box or hull kernel built, for the check of its distance: the candidates along `n` (the final axis, in the
+/// body's frame), the separation of the triangle from the body along it (the best axis's: a lower bound on their
+/// distance), and whether the candidates stand for the closest points only along the axis: the lone deepest vertex
+/// taken when the clipped face lay beyond the margin (it lies beside the face), or edges' closest points clamped to
+/// an end.
+struct BuiltContact {
+    float separation;
+    bool offFace;
+};
+
+/// A box or hull apart from the triangle whose contact misstates their distance (closest_points_contact.h: its
+/// deepest point lies farther out than the best axis's separation allows, or stands beside the face the axis
+/// belongs to, or nothing lay within the margin) gets one point at GJK's closest points instead, its normal the
+/// direction between them, unless the triangle's closest point lies on a feature the ghost rule makes inactive
+/// (the face normal stands there: a neighbour's face covers it). Works in the body's frame: `body` is posed at the
+/// identity, `t` the triangle there. `bodyVertex(p)` names the body's vertex nearest p for the feature id. Returns
+/// whether the candidates were replaced (then `n` is the new normal).
+template <class BodyVertex>
+bool closestPointsInstead(const GjkShape& body, const Vec3 (&t)[3], std::uint8_t activeEdges, float margin, float size,
+                          const BuiltContact& built, Candidates& cands, Vec3& n, BodyVertex&& bodyVertex) {
+    // Touching within rounding (or overlapping), the direction between closest points is noise: the contact stands
+    // unless it puts its deepest point clearly farther out than that.
+    const bool touching = !(built.separation > kClosestPointsMinimumGap * size);
+    if (touching && cands.count == 0) return false;
+    if (cands.count > 0 && (touching || !built.offFace)) {
+        float deepest = cands.depth[0];
+        for (int i = 1; i < cands.count; ++i) deepest = std::max(deepest, cands.depth[i]);
+        const float bound = std::max(built.separation, 0.0f) * (1 + kClosestPointsRelativeTolerance) +
+                            (kClosestPointsAbsoluteTolerance + (touching ? kClosestPointsMinimumGap : 0.0f)) * size;
+        if (deepest >= -bound) return false;
+    }
+    GjkShape triangle;
+    triangle.core = GjkShape::Core::Points;
+    triangle.points = t;
+    triangle.pointCount = 3;
+    const GjkResult g = gjkDistance(body, triangle);
+    if (g.status != GjkStatus::Separated || g.distance > margin) return false;
+    const int feature = closestOnTriangle(g.pointA, t[0], t[1], t[2]).feature;
+    if (!featureActive(feature, activeEdges)) return false;
+    n = g.normal;
+    cands.count = 0;
+    cands.add(g.pointB, -g.distance,
+              kClosestPointsFeatureKind << 30 | (bodyVertex(g.pointA) & 0x3FFFFFu) << 8 |
+                  static_cast<std::uint32_t>(feature));
+    return true;
 }
 
 /// The triangle feature a face axis of the body touches: the triangle vertices within `tol` of the lowest along n
@@ -667,6 +720,8 @@ int boxTriangleContacts(const TriangleBox& box, const Vec3 (&t)[3], Vec3 faceN, 
         if (!featureActive(feature, activeEdges)) kind = Axis::TriangleFace, n = toFace;
     }
 
+    const bool ruled = kind == Axis::TriangleFace && axis.kind != 0;  // the ghost rule chose the face normal
+    bool offFace = false;
     Scratch& sc = scratch();
     Candidates& cands = sc.cands;
     cands.count = 0;
@@ -700,6 +755,7 @@ int boxTriangleContacts(const TriangleBox& box, const Vec3 (&t)[3], Vec3 faceN, 
             const float depth = dot(corner - t[0], n);
             const std::uint32_t id = su > 0 ? (sw > 0 ? 0u : 3u) : (sw > 0 ? 1u : 2u);
             if (depth >= -margin) cands.add(closestOnTriangle(corner, t[0], t[1], t[2]).point, depth, face << 16 | id);
+            offFace = true;
         }
     } else if (kind == Axis::BoxFace) {
         // Reference face of the box: the triangle clipped to the face's four side planes.
@@ -723,6 +779,7 @@ int boxTriangleContacts(const TriangleBox& box, const Vec3 (&t)[3], Vec3 faceN, 
                 if (dot(n, t[i]) < dot(n, t[d])) d = i;
             const float depth = component(h, k) - s * component(t[d], k);
             if (depth >= -margin) cands.add(t[d], depth, 1u << 30 | face << 16 | std::uint32_t(d));
+            offFace = true;
         }
     } else {
         // Edge-edge: the box edge along boxAxis farthest along n against triangle edge triEdge.
@@ -737,6 +794,17 @@ int boxTriangleContacts(const TriangleBox& box, const Vec3 (&t)[3], Vec3 faceN, 
         const float depth = dot(onBox - onTri, n);
         const std::uint32_t boxEdge = std::uint32_t(4 * i + (su < 0 ? 1 : 0) + (sw < 0 ? 2 : 0));
         if (depth >= -margin) cands.add(onTri, depth, 2u << 30 | boxEdge << 8 | std::uint32_t(triEdge));
+        offFace = clampedToAnEnd(sb, st);
+    }
+    if (!ruled) {
+        const float separation = std::min({dot(n, t[0]), dot(n, t[1]), dot(n, t[2])}) -
+                                 (std::abs(n.x) * h.x + std::abs(n.y) * h.y + std::abs(n.z) * h.z);
+        GjkShape body;
+        body.core = GjkShape::Core::Box;
+        body.halfExtents = h;
+        closestPointsInstead(body, t, activeEdges, margin, size, {separation, offFace}, cands, n, [&](Vec3 p) {
+            return std::uint32_t((p.x > 0 ? 1 : 0) | (p.y > 0 ? 2 : 0) | (p.z > 0 ? 4 : 0));
+        });
     }
     if (cands.count == 0) return 0;
     return emitReduced(cands, n, box, out);
@@ -840,12 +908,14 @@ int collideHullTriangle(const ConvexHull& hull, const HullAdjacency& adjacency, 
     if (hullEdge >= 0 && clearlyBetter(sepE, best)) kind = Axis::EdgeEdge, n = axisE;
 
     // Ghost rule: the triangle feature the contact lies on must be active to keep a non-face normal.
+    bool ruled = false;
     if (kind != Axis::TriangleFace) {
         const int feature =
             kind == Axis::HullFace ? featureAlong(t, n, kFeatureTolerance * size) : featureEdge(triEdge);
-        if (!featureActive(feature, activeEdges)) kind = Axis::TriangleFace, n = toFace;
+        if (!featureActive(feature, activeEdges)) kind = Axis::TriangleFace, n = toFace, ruled = true;
     }
 
+    bool offFace = false;
     Candidates& cands = sc.cands;
     cands.count = 0;
     if (kind == Axis::TriangleFace) {
@@ -882,6 +952,7 @@ int collideHullTriangle(const ConvexHull& hull, const HullAdjacency& adjacency, 
             const Vec3 v = V[deepestOnFace];
             const float depth = dot(v - t[0], n);
             if (depth >= -margin) cands.add(closestOnTriangle(v, t[0], t[1], t[2]).point, depth, face | deepestIndex);
+            offFace = true;
         }
     } else if (kind == Axis::HullFace) {
         // Reference face of the hull: the triangle clipped to the face's side planes.
@@ -911,6 +982,7 @@ int collideHullTriangle(const ConvexHull& hull, const HullAdjacency& adjacency, 
                 if (dot(n, t[i]) < dot(n, t[d])) d = i;
             const float depth = offsets[hullFace] - dot(n, t[d]);
             if (depth >= -margin) cands.add(t[d], depth, face | std::uint32_t(d));
+            offFace = true;
         }
     } else {
         // Edge-edge: one point, the closest points of the two edges. Both edges are orthogonal to n, so its depth is
@@ -923,6 +995,22 @@ int collideHullTriangle(const ConvexHull& hull, const HullAdjacency& adjacency, 
         const float depth = dot(p + d * sh - onTri, n);
         const std::uint32_t id = 2u << 30 | (static_cast<std::uint32_t>(hullEdge) & 0xFFFFFFFu) << 2;
         if (depth >= -margin) cands.add(onTri, depth, id | static_cast<std::uint32_t>(triEdge));
+        offFace = clampedToAnEnd(sh, st);
+    }
+    if (!ruled) {
+        const float separation = std::min({dot(n, t[0]), dot(n, t[1]), dot(n, t[2])}) - dot(n, V[support(n)]);
+        GjkShape body;
+        body.core = GjkShape::Core::Points;
+        body.points = V;
+        body.pointCount = static_cast<std::uint32_t>(vertexCount);
+        closestPointsInstead(body, t, activeEdges, margin, size, {separation, offFace}, cands, n, [&](Vec3 p) {
+            std::uint32_t nearest = 0;
+            float nearestSq = INFINITY;
+            for (int i = 0; i < vertexCount; ++i)
+                if (const float d2 = dot(V[i] - p, V[i] - p); d2 < nearestSq)
+                    nearestSq = d2, nearest = std::uint32_t(i);
+            return nearest;
+        });
     }
     if (cands.count == 0) return 0;
     mergeNearDuplicates(cands, kMergeDistance * size);

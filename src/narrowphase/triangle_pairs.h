@@ -26,9 +26,11 @@
 // its closest triangle point, or the triangle's), so a pair the SAT finds within the margin is never dropped. The
 // hull's clipping planes are pushed out by 1e-6 of the size and its candidates within 1e-4 of the size of a deeper
 // one are merged, so shared boundaries (a face coplanar with the triangle, an edge on a side plane) give their
-// vertices once. Each point's depth is the gap along the normal at that point: where the closest features are not
-// a face pair (a hull vertex beside a triangle edge) a speculative manifold can report a gap somewhat larger than the
-// true distance, as clipped manifolds do.
+// vertices once. Each point's depth is the gap along the normal at that point. Apart, where that misstates the
+// distance (the closest features are not a face and what lies over it, or two edges meeting inside both: a box
+// corner beside a triangle edge), the contact is one point at GJK's closest points instead, as the convex kernels do
+// (closest_points_contact.h), unless the triangle's closest point lies on a feature the ghost rule below makes
+// inactive; tests/narrowphase/speculative_contacts_test.cpp checks depth and normal against brute force.
 // Precision: sphere and capsule work relative to the triangle's first vertex, box and hull in their own frame
 // relative to their origin; only differences of nearby world points are taken, so bodies 10 km from the origin keep
 // their depths.
@@ -54,9 +56,9 @@
 //     2 end at center + halfAxis; two points: 0x100 | end << 4 | clip, end 0 (towards center - halfAxis) or 1,
 //     clip 0 when the capsule's own end point is used, 1 + e when the segment was cut by edge e's side plane.
 //   box and hull: bits 30-31 kind: 0 = triangle face is the reference, 1 = the body's face is the reference,
-//     2 = edge-edge. Points of face contacts (bits 0-15) are named as clip.h names them: an incident-polygon vertex
-//     by its index, a crossing by clipPointId(label, plane), label an incident edge (starting at that vertex) or
-//     sidePlaneLabel(p) for a piece along side plane p.
+//     2 = edge-edge, 3 = the closest points. Points of face contacts (bits 0-15) are named as clip.h names them: an
+//     incident-polygon vertex by its index, a crossing by clipPointId(label, plane), label an incident edge
+//     (starting at that vertex) or sidePlaneLabel(p) for a piece along side plane p.
 //     kind 0: the body's incident face in bits 16-29 (box: 2 * axis + (1 if -axis); hull: face index mod 2^14),
 //       the incident polygon is that face (box: the corners (+u +v), (-u +v), (-u -v), (+u -v), u, v the next
 //       axes in cyclic order; hull: its vertices in ConvexHull order), side plane p is triangle edge p's;
@@ -65,6 +67,8 @@
 //       hull p = the side starting at the face's p-th vertex;
 //     kind 2: box: bits 8-15 box edge (4 * axis + (1 if on -u) + (2 if on -v)), bits 0-7 triangle edge; hull:
 //       bits 2-29 hull edge (index into ConvexHull::edges / 2, mod 2^28), bits 0-1 triangle edge;
+//     kind 3: bits 8-29 the body's vertex nearest its closest point (box corner (x > 0) + 2 (y > 0) + 4 (z > 0),
+//       hull vertex index), bits 0-7 the triangle feature code of the triangle's closest point;
 //     0x7FFF in bits 0-15 marks the lone deepest-vertex point when clipping kept nothing, unless it is a vertex of
 //       the incident polygon (then its index).
 #include <array>
