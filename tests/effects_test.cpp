@@ -51,6 +51,41 @@ TEST(Effects, SpinningASphereTurnsRotationOn) {
     EXPECT_GT(std::abs(world.orientation(id).y), 0.04f);
 }
 
+// A static body's material counts as a moving one's, and keeps counting through its coming, its changes and its
+// going (the world keeps counts of static materials rather than scanning its static bodies).
+TEST(Effects, StaticBodiesMaterialsCountAsTheyComeChangeAndGo) {
+    World world(WorldSettings{.gravity = {0, 0, 0}});
+    const ShapeId ball = world.createShape(SphereDef{0.5f});
+    BodyDef moving;
+    moving.shape = ball;
+    moving.material = {0.0f, 0.0f, 1000.0f};
+    world.createBody(moving);
+    EXPECT_FALSE(world.activeEffects().has(Effect::Friction));
+    EXPECT_FALSE(world.activeEffects().has(Effect::Restitution));
+
+    BodyDef wall;
+    wall.type = BodyType::Static;
+    wall.shape = ball;
+    wall.position = {5, 0, 0};
+    wall.material = {0.5f, 0.0f, 1000.0f};
+    const BodyId rough = world.createBody(wall);
+    wall.material = {0.0f, 0.0f, 1000.0f};
+    const BodyId smooth = world.createBody(wall);
+    EXPECT_TRUE(world.activeEffects().has(Effect::Friction));
+    EXPECT_FALSE(world.activeEffects().has(Effect::Restitution));
+
+    world.setMaterial(smooth, {0.0f, 0.8f, 1000.0f});
+    EXPECT_TRUE(world.activeEffects().has(Effect::Restitution));
+    world.destroyBody(rough);
+    EXPECT_FALSE(world.activeEffects().has(Effect::Friction));
+    world.setMaterial(smooth, {0.0f, 0.0f, 1000.0f});
+    EXPECT_FALSE(world.activeEffects().has(Effect::Restitution));
+    world.setMaterial(smooth, {0.3f, 0.0f, 1000.0f});
+    EXPECT_TRUE(world.activeEffects().has(Effect::Friction));
+    world.destroyBody(smooth);
+    EXPECT_FALSE(world.activeEffects().has(Effect::Friction));
+}
+
 TEST(Effects, NamesRoundTrip) {
     for (int b = 0; b < kEffectCount; ++b) {
         const auto e = static_cast<Effect>(1u << b);

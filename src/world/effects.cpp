@@ -3,7 +3,7 @@
 namespace rubble::detail {
 
 EffectSet resolveEffects(EffectSet declared, const WorldSettings& settings, const MovingBodies& moving,
-                         const StaticBodies& statics, const std::vector<Shape>& shapes, bool anyJoints,
+                         const StaticMaterialCounts& statics, const std::vector<Shape>& shapes, bool anyJoints,
                          bool& anyDamping) {
     EffectSet active = declared;
 
@@ -22,10 +22,8 @@ EffectSet resolveEffects(EffectSet declared, const WorldSettings& settings, cons
         const bool round = shapes[moving.shape[i]].kind == ShapeKind::Sphere;
         canTurn |= spinning || torqued || (dynamic && (!round || moving.friction[i] > 0));
     }
-    for (std::uint32_t i = 0, n = statics.size(); i < n; ++i) {
-        anyFriction |= statics.friction[i] > 0;
-        anyRestitution |= statics.restitution[i] > 0;
-    }
+    anyFriction |= statics.withFriction > 0;
+    anyRestitution |= statics.withRestitution > 0;
 
     if (!(gravityVector && anyGravityScale)) active = active.without(Effect::Gravity);
     if (!canTurn && !anyJoints) active = active.without(Effect::Rotation);

@@ -1,6 +1,7 @@
 #pragma once
 // Effects: which physical effects a step simulates. The scene declares a set; the engine drops the effects that
 // the world's content cannot show, so that the step is assembled only from the stages it needs.
+#include <cstdint>
 #include <vector>
 
 #include "rubble/settings.h"
@@ -8,6 +9,19 @@
 #include "storage/body_storage.h"
 
 namespace rubble::detail {
+
+/// How many static bodies have a non-zero friction and restitution coefficient: kept as bodies are created, destroyed
+/// and given materials, so that a world of a million static bodies does not scan them whenever a body comes or goes.
+struct StaticMaterialCounts {
+    std::uint32_t withFriction = 0;
+    std::uint32_t withRestitution = 0;
+
+    /// A static body of this material came (+1) or went (-1).
+    void count(float friction, float restitution, int sign) {
+        withFriction += static_cast<std::uint32_t>(friction > 0 ? sign : 0);
+        withRestitution += static_cast<std::uint32_t>(restitution > 0 ? sign : 0);
+    }
+};
 
 /// Declared effects less those the content cannot show:
 /// - gravity: needs a non-zero gravity vector and a moving body with a non-zero gravity scale;
@@ -19,7 +33,7 @@ namespace rubble::detail {
 /// `anyDamping` reports, from the same pass over the bodies, whether a moving body has damping (which makes the
 /// velocity stage necessary even without gravity, forces or rotation).
 EffectSet resolveEffects(EffectSet declared, const WorldSettings& settings, const MovingBodies& moving,
-                         const StaticBodies& statics, const std::vector<Shape>& shapes, bool anyJoints,
+                         const StaticMaterialCounts& statics, const std::vector<Shape>& shapes, bool anyJoints,
                          bool& anyDamping);
 
 }  // namespace rubble::detail

@@ -151,6 +151,7 @@ BodyId World::createBody(const BodyDef& def) {
         s.qx[i] = q.x, s.qy[i] = q.y, s.qz[i] = q.z, s.qw[i] = q.w;
         s.friction[i] = def.material.friction;
         s.restitution[i] = def.material.restitution;
+        w.staticMaterials.count(def.material.friction, def.material.restitution, 1);
         s.density[i] = def.material.density;
         s.shape[i] = def.shape.index;
         s.filterCategory[i] = def.filter.category;
@@ -205,7 +206,11 @@ void World::destroyBody(BodyId id) {
     // What rested on the body falls: its own sleeping island and the islands it touched wake.
     if (slot.set == BodySet::Moving) w.wake(slot.dense);
     w.sleeping.wakeTouching(id.index, w.bodies, w.contactCache);
-    if (slot.set == BodySet::Static) w.broadPhase.staticRemoved(id.index);
+    if (slot.set == BodySet::Static) {
+        w.broadPhase.staticRemoved(id.index);
+        const detail::StaticBodies& s = w.bodies.statics;
+        w.staticMaterials.count(s.friction[slot.dense], s.restitution[slot.dense], -1);
+    }
     w.joints.removeAttachedTo(id);
     w.bodies.release(id);
     w.queries.bodiesChanged();
@@ -390,6 +395,8 @@ void World::setMaterial(BodyId id, const Material& material) {
     const std::uint32_t i = s.dense;
     if (s.set == BodySet::Static) {
         auto& b = w.bodies.statics;
+        w.staticMaterials.count(b.friction[i], b.restitution[i], -1);
+        w.staticMaterials.count(material.friction, material.restitution, 1);
         b.friction[i] = material.friction, b.restitution[i] = material.restitution, b.density[i] = material.density;
     } else {
         auto& b = w.bodies.moving;

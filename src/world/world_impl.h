@@ -111,6 +111,7 @@ struct World::Impl {
 
     EffectSet effects;
     bool effectsDirty = true;
+    detail::StaticMaterialCounts staticMaterials;
     bool anyDamping = false;
     bool forcesPending = false;
 
@@ -222,7 +223,7 @@ struct World::Impl {
 
     void resolveEffectsIfDirty() {
         if (!effectsDirty) return;
-        effects = detail::resolveEffects(settings.effects, settings, bodies.moving, bodies.statics, shapes,
+        effects = detail::resolveEffects(settings.effects, settings, bodies.moving, staticMaterials, shapes,
                                          joints.activeCount() > 0, anyDamping);
         effectsDirty = false;
     }
