@@ -1,10 +1,12 @@
-// Body storage: creation, O(1) removal with swap-remove, and the state hash, at game-world sizes.
+// Body storage: creation, O(1) removal with swap-remove, and the state hash, at game-world sizes; and a large static
+// world edited between steps (issue 38: no step of it may take more than twice the median or 1 ms).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <random>
 #include <vector>
 
+#include "rubble/profile.h"
 #include "rubble/world.h"
 
 namespace {
@@ -53,8 +55,60 @@ void hashState(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations() * count);
 }
 
+/// A floor of 1,000 x 1,000 static unit boxes with 100 spheres dropped on it; between steps range(0) random floor
+/// boxes are destroyed and as many static boxes created on the floor (crates placed and removed by a game). One
+/// iteration is the edits and one step; the counters give the steps' median and worst step (World::lastProfile's
+/// stepMs, so the edits themselves are not in them) over the run, at range(1) threads.
+void staticWorldEdits(benchmark::State& state) {
+    constexpr int kSide = 1000;
+    const auto edits = static_cast<int>(state.range(0));
+    rubble::World world(rubble::WorldSettings{.threads = static_cast<int>(state.range(1))});
+    const rubble::ShapeId tile = world.createShape(rubble::BoxDef{{0.5f, 0.5f, 0.5f}});
+    const rubble::ShapeId ball = world.createShape(rubble::SphereDef{0.5f});
+    rubble::BodyDef floor;
+    floor.type = rubble::BodyType::Static;
+    floor.shape = tile;
+    std::vector<rubble::BodyId> statics;
+    statics.reserve(kSide * kSide);
+    for (int i = 0; i < kSide; ++i)
+        for (int j = 0; j < kSide; ++j) {
+            floor.position = {i - kSide / 2.0f, -0.5f, j - kSide / 2.0f};
+            statics.push_back(world.createBody(floor));
+        }
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> across(-20, 20), height(2, 12);
+    rubble::BodyDef sphere;
+    sphere.shape = ball;
+    for (int i = 0; i < 100; ++i) {
+        sphere.position = {across(rng), height(rng), across(rng)};
+        world.createBody(sphere);
+    }
+    std::uniform_int_distribution<std::size_t> pick(0, kSide - 1);
+    std::vector<double> stepMs;
+    for (auto _ : state) {
+        for (int e = 0; e < edits; ++e) {
+            const std::size_t at = std::min(pick(rng) * kSide + pick(rng), statics.size() - 1);
+            world.destroyBody(statics[at]);
+            floor.position = {float(pick(rng)) - kSide / 2.0f, 0.5f, float(pick(rng)) - kSide / 2.0f};
+            statics[at] = world.createBody(floor);
+        }
+        world.step(1.0f / 60);
+        stepMs.push_back(world.lastProfile().stepMs);
+    }
+    std::sort(stepMs.begin(), stepMs.end());
+    state.counters["median_ms"] = stepMs[stepMs.size() / 2];
+    state.counters["worst_ms"] = stepMs.back();
+    state.counters["threads"] = static_cast<double>(state.range(1));
+}
+
 }  // namespace
 
 BENCHMARK(createBodies)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK(churnBodies)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK(hashState)->Arg(100'000)->Unit(benchmark::kMillisecond);
+BENCHMARK(staticWorldEdits)
+    ->ArgNames({"edits", "threads"})
+    ->ArgsProduct({{0, 100, 1000}, {1, 2}})
+    ->Iterations(600)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
