@@ -67,14 +67,16 @@ struct TaskPool::Arena {
         job = &chunk;
         jobChunks = chunks;
         next.store(0);
-        busy = static_cast<int>(workers.size());
         ++generation;
         lock.unlock();
         wake.notify_all();
         drain(chunk, 0);
         lock.lock();
-        done.wait(lock, [&] { return busy == 0; });
+        // Every chunk is taken. Closing the job keeps out the workers that have not joined it yet (they would find
+        // nothing left), so the caller waits only for those still running a chunk, never for one still waking up:
+        // on a shared machine a descheduled worker can take milliseconds to wake, which a step of 0.1 ms then paid.
         job = nullptr;
+        done.wait(lock, [&] { return busy == 0; });
     }
 
     void drain(FunctionRef<void(std::size_t, int)> chunk, int worker) {
@@ -89,6 +91,8 @@ struct TaskPool::Arena {
             wake.wait(lock, [&] { return stopping || generation != seen; });
             if (stopping) return;
             seen = generation;
+            if (job == nullptr) continue;  // closed before this worker woke: its chunks were run by others
+            ++busy;
             FunctionRef<void(std::size_t, int)> chunk = *job;
             lock.unlock();
             drain(chunk, worker);
