@@ -376,6 +376,15 @@ bool contains(const Aabb& outer, const Aabb& inner) {
 
 // ---- The forest of parts ----
 
+/// Bodies removed from the parts a merge reads while it runs: remove() appends them (the step's thread), the merge
+/// applies those it finds to its result once its tree is built (its own thread), and the landing only the few
+/// removed after that. So a large merge that ran for seconds while a game removed statics lands without a pause.
+struct MergeRemovalLog {
+    std::mutex mutex;
+    std::vector<std::uint32_t> bodies;
+    std::size_t applied = 0;  ///< entries the merge applied to its result
+};
+
 /// One built tree of the forest, with what its edits and merges need.
 struct StaticBvh::Part {
     std::uint32_t id = 0;
@@ -384,9 +393,10 @@ struct StaticBvh::Part {
     std::vector<std::uint64_t> byBody;
     /// The primitives it was built from, never changed: merges read them on their own threads.
     std::shared_ptr<const std::vector<StaticPrimitive>> source;
-    std::vector<std::uint32_t> removed;  ///< bodies tombstoned in it; merges leave their primitives out
-    std::uint32_t tombstones = 0;        ///< lanes
-    bool merging = false;                ///< a merge in flight reads it
+    std::vector<std::uint32_t> removed;         ///< bodies tombstoned in it; merges leave their primitives out
+    std::uint32_t tombstones = 0;               ///< lanes
+    bool merging = false;                       ///< a merge in flight reads it
+    std::shared_ptr<MergeRemovalLog> mergeLog;  ///< while merging: where its removals go for the merge's result
 
     std::uint32_t size() const { return std::uint32_t(tree.primitives.size()); }
     std::uint32_t live() const { return size() - tombstones; }
@@ -396,15 +406,14 @@ struct StaticBvh::Part {
 struct StaticBvh::Merge {
     struct Work {
         std::vector<std::shared_ptr<const std::vector<StaticPrimitive>>> sources;
-        std::vector<std::vector<std::uint32_t>> removed;  ///< per source, sorted
+        std::vector<std::vector<std::uint32_t>> removed;  ///< per source, sorted by the merge
+        std::shared_ptr<MergeRemovalLog> log;             ///< removed since it started
         std::unique_ptr<Part> result;
         std::atomic<bool> done{false};
     };
     std::shared_ptr<Work> work;
     std::uint32_t tier = 0;
     std::vector<std::uint32_t> sourceIds;
-    /// Per source: how many of its `removed` the merge left out; the ones after were removed while it ran.
-    std::vector<std::size_t> removedAtStart;
 };
 
 /// A thread that runs jobs in order under the idle scheduling policy: it runs only on a core nothing else wants,
@@ -486,7 +495,13 @@ bool tombstone(StaticBvh::Part& part, std::uint32_t body) {
         ++part.tombstones;
         found = true;
     }
-    if (found) part.removed.push_back(body);
+    if (found) {
+        part.removed.push_back(body);
+        if (part.mergeLog) {
+            const std::lock_guard lock(part.mergeLog->mutex);
+            part.mergeLog->bodies.push_back(body);
+        }
+    }
     return found;
 }
 
@@ -514,12 +529,19 @@ void runMerge(StaticBvh::Merge::Work& work, const std::atomic<bool>& cancel) {
     auto merged = std::make_shared<std::vector<StaticPrimitive>>();
     merged->reserve(total);
     for (std::size_t s = 0; s < work.sources.size(); ++s) {
-        const std::vector<std::uint32_t>& removed = work.removed[s];
+        std::vector<std::uint32_t>& removed = work.removed[s];
+        std::sort(removed.begin(), removed.end());
         for (const StaticPrimitive& p : *work.sources[s])
             if (!std::binary_search(removed.begin(), removed.end(), p.body)) merged->push_back(p);
     }
     std::unique_ptr<StaticBvh::Part> part = makePart(std::move(merged), nullptr, &cancel);
     if (cancel.load(std::memory_order_relaxed)) return;
+    {
+        // What was removed while the tree was built; the landing applies what comes after.
+        const std::lock_guard lock(work.log->mutex);
+        for (; work.log->applied < work.log->bodies.size(); ++work.log->applied)
+            tombstone(*part, work.log->bodies[work.log->applied]);
+    }
     work.result = std::move(part);
     work.done.store(true, std::memory_order_release);
 }
@@ -555,7 +577,7 @@ StaticBvh::~StaticBvh() { dropMerges(); }
 void StaticBvh::dropMerges() {
     mergeWorkers_.clear();  // each drops the jobs not begun, cancels the running one and joins
     merges_.clear();
-    for (const std::unique_ptr<Part>& p : parts_) p->merging = false;
+    for (const std::unique_ptr<Part>& p : parts_) p->merging = false, p->mergeLog.reset();
 }
 
 StaticBvh::BackgroundWorker& StaticBvh::workerFor(std::uint32_t tier) {
@@ -655,14 +677,17 @@ void StaticBvh::landFinishedMerges() {
         result->id = std::uint32_t(mergedInto_.size());
         mergedInto_.push_back(result->id);
         for (const std::uint32_t source : m.sourceIds) mergedInto_[source] = result->id;
+        {
+            // Removed after the merge caught up: the result still holds them.
+            MergeRemovalLog& log = *m.work->log;
+            const std::lock_guard lock(log.mutex);
+            for (std::size_t r = log.applied; r < log.bodies.size(); ++r) tombstone(*result, log.bodies[r]);
+        }
         std::vector<std::unique_ptr<Part>> replaced;
         std::size_t replacedSize = 0;
         for (std::unique_ptr<Part>& p : parts_) {
-            const auto source = std::find(m.sourceIds.begin(), m.sourceIds.end(), p->id);
-            if (source == m.sourceIds.end()) continue;
-            // Removed while the merge ran: the result still holds them.
-            const std::size_t done = m.removedAtStart[std::size_t(source - m.sourceIds.begin())];
-            for (std::size_t r = done; r < p->removed.size(); ++r) tombstone(*result, p->removed[r]);
+            if (std::find(m.sourceIds.begin(), m.sourceIds.end(), p->id) == m.sourceIds.end()) continue;
+            p->mergeLog.reset();
             replacedSize += p->size();
             replaced.push_back(std::move(p));
         }
@@ -722,14 +747,13 @@ std::size_t StaticBvh::startDueMerges(bool background) {
 void StaticBvh::startMerge(std::vector<Part*> sources, std::uint32_t tier, bool background) {
     auto merge = std::make_unique<Merge>();
     merge->work = std::make_shared<Merge::Work>();
+    merge->work->log = std::make_shared<MergeRemovalLog>();
     for (Part* p : sources) {
         p->merging = true;
+        p->mergeLog = merge->work->log;
         merge->sourceIds.push_back(p->id);
-        merge->removedAtStart.push_back(p->removed.size());
         merge->work->sources.push_back(p->source);
-        std::vector<std::uint32_t> removed = p->removed;
-        std::sort(removed.begin(), removed.end());
-        merge->work->removed.push_back(std::move(removed));
+        merge->work->removed.push_back(p->removed);  // sorted by the merge, off the step
     }
     merge->tier = tier;
     if (background) {
