@@ -17,6 +17,10 @@ constexpr std::size_t kManifoldChunk = 1024;
 /// Batches per task inside a colour: small enough that two threads share a colour of a few thousand manifolds,
 /// large enough that a task outweighs its dispatch.
 constexpr std::size_t kBatchChunk = 8;
+/// Below this many batches a solve runs on the calling thread alone: it costs less than waking a second worker and
+/// meeting it at every phase, and a worker that the machine deschedules while it holds a unit would hold up the
+/// step for milliseconds (seen on these shared two-core machines: a 0.08 ms step of 100 spheres took 2.5-4.6 ms).
+constexpr std::size_t kBatchesForTwoWorkers = 16;
 /// Shock propagation: passes over each level's contacts.
 constexpr int kShockPasses = 4;
 
@@ -479,7 +483,7 @@ void ContactSolver::forEachColorInOneRegion(TaskPool& pool, Kernel& kernel, int 
         if (!slabs_.empty()) phaseWork_.push_back({kSlabsPhase, pass});
         if (!before) colours();
     }
-    const int workers = pool.threadCount();
+    const int workers = batches_.size() < kBatchesForTwoWorkers ? 1 : pool.threadCount();
     phases_.reset(phaseWork_.size(), workers);
     // The blocks in shares of about equal batch counts (a block's batches follow the previous block's).
     blockShareStart_.assign(static_cast<std::size_t>(workers) + 1, static_cast<std::uint32_t>(blocks_.size()));
@@ -506,7 +510,7 @@ void ContactSolver::forEachColorInOneRegion(TaskPool& pool, Kernel& kernel, int 
         phases_.setEven(p, static_cast<std::uint32_t>(units));
     }
     const bool buildBlocks = blocksPending_;
-    pool.forEachWorker([&](int worker) {
+    const auto region = [&](int worker) {
         const BodyRows rows = rowsFor(worker);
         phases_.run(0, worker, [&](std::uint32_t bl) {
             if (buildBlocks) buildBlock(bl);
@@ -531,7 +535,11 @@ void ContactSolver::forEachColorInOneRegion(TaskPool& pool, Kernel& kernel, int 
             phases_.wait(p);
         }
         phases_.wait(0);
-    });
+    };
+    if (workers == 1)
+        region(0);
+    else
+        pool.forEachWorker(region);
     blocksPending_ = false;
 }
 
