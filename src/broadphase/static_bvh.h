@@ -16,7 +16,8 @@
 //    size (a tier: sizes within a factor kMergeFanIn) are merged kMergeFanIn at a time into one of the next tier,
 //    and a part with more than a quarter of its lanes tombstoned is rebuilt alone. A merge reads only the parts'
 //    immutable primitive lists; the parts stay in use until the next commit() after it finished swaps its result in
-//    (removals made meanwhile are applied to the result then). So the forest holds O(kMergeFanIn log n) parts, every
+//    (removals made meanwhile go to the merge's log: the merge applies them to its result once its tree is built,
+//    the commit only those made after that). So the forest holds O(kMergeFanIn log n) parts, every
 //    primitive is rebuilt O(log n) times in the background, and a step never waits for a merge.
 // Results never depend on which part holds a primitive (every query sorts its hits), so when a merge lands, which
 // depends on the machine's timing, never changes a result; merges do not change the content, so they keep the

@@ -212,7 +212,8 @@ private:
                       int firstIteration = std::numeric_limits<int>::max());
     /// forEachColor's work in one parallel region (more than one thread, no joints): each worker runs its share of
     /// the blocks, then pass by pass its share of each of the large islands' colours and of the slabs, helping with
-    /// the others' shares when done, with a barrier after each colour instead of a fork and join.
+    /// the others' shares when done, with a barrier after each colour instead of a fork and join. A solve of fewer
+    /// than kBatchesForTwoWorkers batches runs on the calling thread alone.
     template <class Kernel>
     void forEachColorInOneRegion(TaskPool& pool, Kernel& kernel, int passes, int firstIteration);
     template <class Kernel>
