@@ -250,6 +250,14 @@ struct BuiltContact {
     bool offFace;
 };
 
+/// Whether every candidate lies apart (none touches or overlaps): only then can the shapes be apart, and the check
+/// below worth its cost (most contacts of a resting pile overlap by a little).
+bool allApart(const Candidates& cands) {
+    for (int i = 0; i < cands.count; ++i)
+        if (cands.depth[i] >= 0) return false;
+    return true;
+}
+
 /// A box or hull apart from the triangle whose contact misstates their distance (closest_points_contact.h: its
 /// deepest point lies farther out than the best axis's separation allows, or stands beside the face the axis
 /// belongs to, or nothing lay within the margin) gets one point at GJK's closest points instead, its normal the
@@ -796,7 +804,7 @@ int boxTriangleContacts(const TriangleBox& box, const Vec3 (&t)[3], Vec3 faceN, 
         if (depth >= -margin) cands.add(onTri, depth, 2u << 30 | boxEdge << 8 | std::uint32_t(triEdge));
         offFace = clampedToAnEnd(sb, st);
     }
-    if (!ruled) {
+    if (!ruled && allApart(cands)) {
         const float separation = std::min({dot(n, t[0]), dot(n, t[1]), dot(n, t[2])}) -
                                  (std::abs(n.x) * h.x + std::abs(n.y) * h.y + std::abs(n.z) * h.z);
         GjkShape body;
@@ -997,7 +1005,7 @@ int collideHullTriangle(const ConvexHull& hull, const HullAdjacency& adjacency, 
         if (depth >= -margin) cands.add(onTri, depth, id | static_cast<std::uint32_t>(triEdge));
         offFace = clampedToAnEnd(sh, st);
     }
-    if (!ruled) {
+    if (!ruled && allApart(cands)) {
         const float separation = std::min({dot(n, t[0]), dot(n, t[1]), dot(n, t[2])}) - dot(n, V[support(n)]);
         GjkShape body;
         body.core = GjkShape::Core::Points;
