@@ -74,12 +74,7 @@ void BM_MultiResolutionGridS4(benchmark::State& state) {
 /// the candidates past the budget.
 void BM_MultiResolutionGridPile(benchmark::State& state) {
     const auto n = static_cast<std::uint32_t>(state.range(0));
-    Bounds bounds;
-    bounds.resize(n);
-    for (std::uint32_t i = 0; i < n; ++i) {
-        bounds.minX[i] = bounds.minY[i] = bounds.minZ[i] = -0.5f;
-        bounds.maxX[i] = bounds.maxY[i] = bounds.maxZ[i] = 0.5f;
-    }
+    const Bounds bounds = rubble::test::pileAtOnePoint(n);
     TaskPool pool(static_cast<int>(state.range(1)));
     MultiResolutionGrid grid;
     std::vector<BodyPair> pairs;

@@ -144,12 +144,7 @@ void BM_SortPairsFewPerBody(benchmark::State& state) {
 /// under the pair budget. range(0): boxes; range(1): threads. "dropped" counts the candidates past the budget.
 void BM_SweepAndPrunePile(benchmark::State& state) {
     const auto n = static_cast<std::uint32_t>(state.range(0));
-    Bounds bounds;
-    bounds.resize(n);
-    for (std::uint32_t i = 0; i < n; ++i) {
-        bounds.minX[i] = bounds.minY[i] = bounds.minZ[i] = -0.5f;
-        bounds.maxX[i] = bounds.maxY[i] = bounds.maxZ[i] = 0.5f;
-    }
+    const Bounds bounds = rubble::test::pileAtOnePoint(n);
     std::vector<std::uint32_t> slots(n);
     std::iota(slots.begin(), slots.end(), 0u);
     TaskPool pool(static_cast<int>(state.range(1)));

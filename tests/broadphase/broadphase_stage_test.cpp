@@ -385,14 +385,8 @@ TEST(PairBudget, APileAtOnePointCostsLinearTimeAndAPlatformKeepsEveryCrate) {
         return std::tuple{fromSap, sap.droppedPairs(), fromGrid, grid.droppedPairs()};
     };
 
-    constexpr std::uint32_t kSmall = 3000, kLarge = 3000, n = kSmall + kLarge;
-    Bounds pile;
-    pile.resize(n);
-    for (std::uint32_t i = 0; i < n; ++i) {
-        const float half = i < kSmall ? 0.5f : 10.0f;
-        pile.minX[i] = pile.minY[i] = pile.minZ[i] = -half;
-        pile.maxX[i] = pile.maxY[i] = pile.maxZ[i] = half;
-    }
+    constexpr std::uint32_t n = 6000;
+    const Bounds pile = test::pileAtOnePoint(n / 2, n / 2);
     const auto one = bothAlgorithms(pile, 1);
     const auto& [sapPairs, sapDropped, gridPairs, gridDropped] = one;
     for (const auto& [name, pairs, dropped] :

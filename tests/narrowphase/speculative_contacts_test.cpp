@@ -131,6 +131,25 @@ float deepestOf(const Manifold& m) {
 struct Tally {
     int checked = 0, depthOff = 0, normalOff = 0;
 
+    /// Compares contact `m` (`hit`: the kernel reported one) of pose n with the brute force's `truth`: the deepest
+    /// point's depth within 2e-5 m + 0.5% of the distance, the normal within cosine 0.99.
+    void compare(bool hit, const Manifold& m, const Closest& truth, int n) {
+        EXPECT_TRUE(hit) << "pose " << n << ": no contact for shapes " << truth.distance << " m apart";
+        if (!hit) return;
+        ++checked;
+        const double deepest = deepestOf(m);
+        const bool depthOk = std::fabs(deepest + truth.distance) <= 2e-5 + 0.005 * truth.distance;
+        const double alignment = dotd(d3(m.normal), truth.normal);
+        const bool normalOk = alignment > 0.99;
+        depthOff += !depthOk;
+        normalOff += !normalOk;
+        EXPECT_TRUE(depthOk) << "pose " << n << ": deepest " << deepest << ", distance " << truth.distance
+                             << ", feature " << std::hex << m.points[0].feature << std::dec;
+        EXPECT_TRUE(normalOk) << "pose " << n << ": normal . the closest points' direction " << alignment
+                              << ", deepest " << deepest << ", distance " << truth.distance << ", feature " << std::hex
+                              << m.points[0].feature << std::dec;
+    }
+
     /// Prints the counts for `pair` and requires enough pairs to have been compared.
     void report(const char* pair) const {
         std::printf("[ %s ] %d speculative pairs, %d depths and %d normals off the brute force\n", pair, checked,
@@ -159,21 +178,7 @@ void compareWithBruteForce(std::mt19937& rng, int poses, const Shape& shapeA, co
         const Closest truth = bruteForceDistance(posed(ha, pa), posed(hb, pb));
         if (truth.distance < 2e-4 || truth.distance > kMargin - 1e-4) continue;
         Manifold m;
-        const bool hit = collide(pa, pb, m);
-        EXPECT_TRUE(hit) << "pose " << n << ": no contact for shapes " << truth.distance << " m apart";
-        if (!hit) continue;
-        ++t.checked;
-        const double deepest = deepestOf(m);
-        const bool depthOk = std::fabs(deepest + truth.distance) <= 2e-5 + 0.005 * truth.distance;
-        const double alignment = dotd(d3(m.normal), truth.normal);
-        const bool normalOk = alignment > 0.99;
-        t.depthOff += !depthOk;
-        t.normalOff += !normalOk;
-        EXPECT_TRUE(depthOk) << "pose " << n << ": deepest " << deepest << ", distance " << truth.distance
-                             << ", feature " << std::hex << m.points[0].feature << std::dec;
-        EXPECT_TRUE(normalOk) << "pose " << n << ": normal . the closest points' direction " << alignment
-                              << ", deepest " << deepest << ", distance " << truth.distance << ", feature " << std::hex
-                              << m.points[0].feature << std::dec;
+        t.compare(collide(pa, pb, m), m, truth, n);
     }
 }
 
@@ -278,21 +283,7 @@ void compareWithTriangle(std::mt19937& rng, int poses, const Shape& shapeA, cons
             EXPECT_GT(std::fabs(dot(inside.normal, face)), 0.99999f) << "pose " << n << ": ghost rule";
         }
         Manifold m;
-        const bool hit = collide(pa, tri, kAllEdgesActive, m) > 0;
-        EXPECT_TRUE(hit) << "pose " << n << ": no contact for a body " << truth.distance << " m from the triangle";
-        if (!hit) continue;
-        ++t.checked;
-        const double deepest = deepestOf(m);
-        const bool depthOk = std::fabs(deepest + truth.distance) <= 2e-5 + 0.005 * truth.distance;
-        const double alignment = dotd(d3(m.normal), truth.normal);
-        const bool normalOk = alignment > 0.99;
-        t.depthOff += !depthOk;
-        t.normalOff += !normalOk;
-        EXPECT_TRUE(depthOk) << "pose " << n << ": deepest " << deepest << ", distance " << truth.distance
-                             << ", feature " << std::hex << m.points[0].feature << std::dec;
-        EXPECT_TRUE(normalOk) << "pose " << n << ": normal . the closest points' direction " << alignment
-                              << ", deepest " << deepest << ", distance " << truth.distance << ", feature " << std::hex
-                              << m.points[0].feature << std::dec;
+        t.compare(collide(pa, tri, kAllEdgesActive, m) > 0, m, truth, n);
     }
 }
 

@@ -84,6 +84,19 @@ inline Bounds makeScenario(Scenario s, std::uint32_t n, std::uint32_t seed = 42)
     return b;
 }
 
+/// Bodies piled onto one point (a `grid` generator with spacing 0): `small` boxes of half extent 0.5, then `large`
+/// ones of half extent 10, all centred on the origin, so every pair overlaps.
+inline Bounds pileAtOnePoint(std::uint32_t small, std::uint32_t large = 0) {
+    Bounds b;
+    b.resize(small + large);
+    for (std::uint32_t i = 0; i < small + large; ++i) {
+        const float h = i < small ? 0.5f : 10.0f;
+        b.minX[i] = b.minY[i] = b.minZ[i] = -h;
+        b.maxX[i] = b.maxY[i] = b.maxZ[i] = h;
+    }
+    return b;
+}
+
 /// Every overlapping pair (a < b) accepted by the filter, sorted: the reference answer.
 inline std::vector<BodyPair> bruteForcePairs(const Bounds& b, const PairFilter& filter = {}) {
     std::vector<BodyPair> out;
