@@ -75,18 +75,23 @@ struct SortedView {
 /// With a row's x cells `slotX` (ascending in [j0, j1)), stops after the first batch that reaches past x cell xHi:
 /// later slots of the row lie further right and cannot be neighbours. Once slot i's search has spent its budget
 /// (`pairs`), the candidates left are counted as dropped, not tested.
+/// Counts the candidates [j, j1) of a search that spent its budget as dropped (with `slotX`, those up to x cell xHi).
+/// Out of line: only piles get here, and inlined it would weigh on the search loop of every scene.
+[[gnu::noinline, gnu::cold]] void skipCandidates(ChunkPairs& pairs, std::uint32_t j, std::uint32_t j1,
+                                                 const std::uint32_t* slotX, std::uint32_t xHi) {
+    const std::uint32_t end =
+        slotX != nullptr ? static_cast<std::uint32_t>(std::upper_bound(slotX + j, slotX + j1, xHi) - slotX) : j1;
+    pairs.skip(end - j);
+}
+
 template <class Hit>
 inline void forOverlapping(const SortedView& s, std::uint32_t i, std::uint32_t j0, std::uint32_t j1,
                            const std::uint32_t* slotX, std::uint32_t xHi, const simd::FloatW& laneIndex,
                            ChunkPairs& pairs, Hit&& hit) {
     using simd::FloatW;
-    const auto skipFrom = [&](std::uint32_t j) {
-        const std::uint32_t end =
-            slotX != nullptr ? static_cast<std::uint32_t>(std::upper_bound(slotX + j, slotX + j1, xHi) - slotX) : j1;
-        pairs.skip(end - j);
-    };
     if (j0 >= j1) return;
-    if (pairs.bodyDone()) return skipFrom(j0);
+    if (pairs.bodyDone()) [[unlikely]]
+        return skipCandidates(pairs, j0, j1, slotX, xHi);
     const FloatW aMinX(s.minX[i]), aMinY(s.minY[i]), aMinZ(s.minZ[i]);
     const FloatW aMaxX(s.maxX[i]), aMaxY(s.maxY[i]), aMaxZ(s.maxZ[i]);
     for (std::uint32_t j = j0;; j += static_cast<std::uint32_t>(simd::kLanes)) {
@@ -98,9 +103,11 @@ inline void forOverlapping(const SortedView& s, std::uint32_t i, std::uint32_t j
             m, simd::andMask(aMinY <= simd::load<FloatW>(s.maxY + j), simd::load<FloatW>(s.minY + j) <= aMaxY));
         m = simd::andMask(
             m, simd::andMask(aMinZ <= simd::load<FloatW>(s.maxZ + j), simd::load<FloatW>(s.minZ + j) <= aMaxZ));
-        simd::forEachSetLane(m, [&](std::size_t k) { hit(j + static_cast<std::uint32_t>(k)); });
+        // Most batches hit nothing: test before the per-lane loop, which the compiler may keep out of line.
+        if (simd::any(m)) simd::forEachSetLane(m, [&](std::size_t k) { hit(j + static_cast<std::uint32_t>(k)); });
         if (j1 - j <= simd::kLanes || (slotX != nullptr && slotX[j + simd::kLanes - 1] > xHi)) return;
-        if (pairs.bodyDone()) return skipFrom(j + static_cast<std::uint32_t>(simd::kLanes));
+        if (pairs.bodyDone()) [[unlikely]]
+            return skipCandidates(pairs, j + static_cast<std::uint32_t>(simd::kLanes), j1, slotX, xHi);
     }
 }
 
