@@ -160,6 +160,54 @@ void split(std::vector<BuildPrimitive>& prims, const Range& r, Range& left, Rang
     for (int s = 0; s < binCount; ++s) (s < bestSplit ? left.box : right.box).grow(bins[a][s]);
 }
 
+/// Splits `r` at its middle: the quick build's split, over records in Morton order, where each half of a range is
+/// a compact region of space. Both halves are non-empty.
+void splitAtMiddle(const std::vector<BuildPrimitive>& prims, const Range& r, Range& left, Range& right) {
+    const std::uint32_t mid = r.begin + r.size() / 2;
+    left = {r.begin, mid, rangeBox(prims, r.begin, mid)};
+    right = {mid, r.end, rangeBox(prims, mid, r.end)};
+}
+
+/// The bits of a 10-bit value spread to every third bit, for a Morton code.
+std::uint32_t spreadToEveryThirdBit(std::uint32_t v) {
+    v &= 0x3FFu;
+    v = (v | v << 16) & 0x030000FFu;
+    v = (v | v << 8) & 0x0300F00Fu;
+    v = (v | v << 4) & 0x030C30C3u;
+    v = (v | v << 2) & 0x09249249u;
+    return v;
+}
+
+/// Reorders the records along the Morton curve of their centroids (10 bits per axis over the centroids' bounds);
+/// ties keep their input order, so the order depends on the input alone.
+void sortAlongMortonCurve(std::vector<BuildPrimitive>& prims) {
+    constexpr int kCells = 1 << 10;
+    float clo[3] = {kInf, kInf, kInf}, chi[3] = {-kInf, -kInf, -kInf};
+    for (const BuildPrimitive& p : prims)
+        for (int a = 0; a < 3; ++a) {
+            clo[a] = std::min(clo[a], p.centroid[a]);
+            chi[a] = std::max(chi[a], p.centroid[a]);
+        }
+    float scale[3];
+    for (int a = 0; a < 3; ++a) {
+        const float extent = chi[a] - clo[a];
+        scale[a] = extent > 0 ? float(kCells) / extent : 0;
+    }
+    std::vector<std::uint64_t> keys(prims.size());
+    for (std::size_t i = 0; i < prims.size(); ++i) {
+        std::uint32_t code = 0;
+        for (int a = 0; a < 3; ++a)
+            code |= spreadToEveryThirdBit(std::uint32_t(binOf(prims[i].centroid[a], clo[a], scale[a], kCells))) << a;
+        keys[i] = std::uint64_t(code) << 32 | i;
+    }
+    std::sort(keys.begin(), keys.end());
+    std::vector<BuildPrimitive> sorted(prims.size());
+    for (std::size_t i = 0; i < keys.size(); ++i) sorted[i] = prims[std::uint32_t(keys[i])];
+    prims.swap(sorted);
+}
+
+using BuildQuality = StaticBvh::BuildQuality;
+
 struct BuildTask {
     Range range;
     std::uint32_t parent = kNoParent;  ///< node whose lane points here
@@ -183,8 +231,14 @@ Node emptyNode() {
 /// With `deferred`, child ranges of at most `deferAtMost` primitives are recorded for a parallel pass instead of
 /// being expanded. Returns the deepest node level reached.
 std::uint32_t buildNodes(std::vector<BuildPrimitive>& prims, const BuildTask& root, AlignedVector<Node>& nodes,
-                         std::vector<BuildTask>* deferred, std::uint32_t deferAtMost,
+                         std::vector<BuildTask>* deferred, std::uint32_t deferAtMost, BuildQuality quality,
                          const std::atomic<bool>* cancel = nullptr) {
+    const auto halve = [&](const Range& r, Range& left, Range& right) {
+        if (quality == BuildQuality::Quick)
+            splitAtMiddle(prims, r, left, right);
+        else
+            split(prims, r, left, right);
+    };
     std::uint32_t depth = 0;
     std::vector<BuildTask> stack{root};
     while (!stack.empty()) {
@@ -203,10 +257,10 @@ std::uint32_t buildNodes(std::vector<BuildPrimitive>& prims, const BuildTask& ro
             for (std::uint32_t i = r.begin; i < r.end; ++i) children[count++] = {i, i + 1, prims[i].box};
         } else {
             Range halves[2];
-            split(prims, r, halves[0], halves[1]);
+            halve(r, halves[0], halves[1]);
             for (const Range& h : halves) {
                 if (h.size() > 4) {  // a range of up to four fills one leaf node; splitting it would waste lanes
-                    split(prims, h, children[count], children[count + 1]);
+                    halve(h, children[count], children[count + 1]);
                     count += 2;
                 } else {
                     children[count++] = h;
@@ -232,12 +286,13 @@ std::uint32_t buildNodes(std::vector<BuildPrimitive>& prims, const BuildTask& ro
 bool isPrimitive(std::uint32_t child) { return (child & kPrimitiveBit) != 0 && child != kUnusedLane; }
 
 void buildTreeUnlessCancelled(StaticBvh::Tree& tree, std::span<const StaticPrimitive> primitives, TaskPool* pool,
-                              const std::atomic<bool>* cancel);
+                              BuildQuality quality, const std::atomic<bool>* cancel);
 
 }  // namespace
 
-void StaticBvh::buildTree(Tree& tree, std::span<const StaticPrimitive> primitives, TaskPool* pool) {
-    buildTreeUnlessCancelled(tree, primitives, pool, nullptr);
+void StaticBvh::buildTree(Tree& tree, std::span<const StaticPrimitive> primitives, TaskPool* pool,
+                          BuildQuality quality) {
+    buildTreeUnlessCancelled(tree, primitives, pool, quality, nullptr);
 }
 
 namespace {
@@ -246,7 +301,7 @@ namespace {
 /// appended in a fixed order: the result depends on the input alone. A serial build stops early, leaving a tree
 /// to throw away, once `cancel` is set.
 void buildTreeUnlessCancelled(StaticBvh::Tree& tree, std::span<const StaticPrimitive> primitives, TaskPool* pool,
-                              const std::atomic<bool>* cancel) {
+                              BuildQuality quality, const std::atomic<bool>* cancel) {
     tree.nodes.clear();
     tree.primitives.clear();
     tree.depth = 0;
@@ -264,21 +319,22 @@ void buildTreeUnlessCancelled(StaticBvh::Tree& tree, std::span<const StaticPrimi
         all.grow(p.box);
     }
 
+    if (quality == BuildQuality::Quick) sortAlongMortonCurve(prims);
     const BuildTask root{{0, n, all}, kNoParent, 0, 1};
     if (n < kParallelBuildMin || pool == nullptr) {
-        tree.depth = buildNodes(prims, root, tree.nodes, nullptr, 0, cancel);
+        tree.depth = buildNodes(prims, root, tree.nodes, nullptr, 0, quality, cancel);
     } else {
         // Subtree size cut: a function of n only (never of the thread count), giving some 64-128 tasks.
         const std::uint32_t cut = std::max<std::uint32_t>(4096, n / 64);
         std::vector<BuildTask> jobs;
-        tree.depth = buildNodes(prims, root, tree.nodes, &jobs, cut);
+        tree.depth = buildNodes(prims, root, tree.nodes, &jobs, cut, quality);
         std::vector<AlignedVector<Node>> jobNodes(jobs.size());
         std::vector<std::uint32_t> jobDepth(jobs.size());
         pool->forChunks(jobs.size(), 1, [&](std::size_t j, std::size_t, std::size_t, int) {
             BuildTask local = jobs[j];
             local.parent = kNoParent;
             // Jobs partition disjoint ranges of prims, so they never touch the same data.
-            jobDepth[j] = buildNodes(prims, local, jobNodes[j], nullptr, 0);
+            jobDepth[j] = buildNodes(prims, local, jobNodes[j], nullptr, 0, quality);
         });
         for (std::size_t j = 0; j < jobs.size(); ++j) {
             const auto offset = std::uint32_t(tree.nodes.size());
@@ -396,6 +452,7 @@ struct StaticBvh::Part {
     std::vector<std::uint32_t> removed;         ///< bodies tombstoned in it; merges leave their primitives out
     std::uint32_t tombstones = 0;               ///< lanes
     bool merging = false;                       ///< a merge in flight reads it
+    bool quick = false;                         ///< built by the quick build: rebuilt with the SAH once edits pause
     std::shared_ptr<MergeRemovalLog> mergeLog;  ///< while merging: where its removals go for the merge's result
 
     std::uint32_t size() const { return std::uint32_t(tree.primitives.size()); }
@@ -466,9 +523,10 @@ constexpr std::uint32_t kPendingPart = ~0u - 1;
 
 /// Builds a part over `source` (its id is set by the caller).
 std::unique_ptr<StaticBvh::Part> makePart(std::shared_ptr<const std::vector<StaticPrimitive>> source, TaskPool* pool,
-                                          const std::atomic<bool>* cancel = nullptr) {
+                                          BuildQuality quality, const std::atomic<bool>* cancel = nullptr) {
     auto part = std::make_unique<StaticBvh::Part>();
-    buildTreeUnlessCancelled(part->tree, *source, pool, cancel);
+    part->quick = quality == BuildQuality::Quick;
+    buildTreeUnlessCancelled(part->tree, *source, pool, quality, cancel);
     if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) return part;
     const StaticBvh::Tree& t = part->tree;
     part->byBody.reserve(t.primitives.size());
@@ -482,8 +540,9 @@ std::unique_ptr<StaticBvh::Part> makePart(std::shared_ptr<const std::vector<Stat
     return part;
 }
 
-/// Empties the lanes of `body` in `part`; returns whether it had any.
-bool tombstone(StaticBvh::Part& part, std::uint32_t body) {
+/// Empties the lanes of `body` in `part`, appending their boxes to `removedBoxes` if given; returns whether it had
+/// any.
+bool tombstone(StaticBvh::Part& part, std::uint32_t body, std::vector<Aabb>* removedBoxes = nullptr) {
     const std::uint64_t first = std::uint64_t(body) << 32;
     bool found = false;
     for (auto it = std::lower_bound(part.byBody.begin(), part.byBody.end(), first);
@@ -491,6 +550,7 @@ bool tombstone(StaticBvh::Part& part, std::uint32_t body) {
         StaticBvh::Node& node = part.tree.nodes[std::uint32_t(*it) / 4];
         const int lane = int(std::uint32_t(*it) % 4);
         if (!(node.lo[lane] <= node.hi[lane])) continue;  // tombstoned already
+        if (removedBoxes != nullptr) removedBoxes->push_back(node.box(lane));
         node.setBox(lane, Box{}.aabb());
         ++part.tombstones;
         found = true;
@@ -503,6 +563,14 @@ bool tombstone(StaticBvh::Part& part, std::uint32_t body) {
         }
     }
     return found;
+}
+
+/// Half the surface area of a part's root box, as a power of four (areas below 1 m^2 count as 1 m^2).
+int areaClass(const StaticBvh::Part& part) {
+    Box box;
+    for (int k = 0; k < 4; ++k) box.grow(toBox(part.tree.nodes[0].box(k)));
+    const float area = box.halfArea();
+    return area > 1 ? std::ilogb(area) / 2 : 0;  // a NaN area counts as small, an infinite one as the widest
 }
 
 /// Tier of a part of `size` live primitives: sizes within a factor kMergeFanIn share a tier.
@@ -534,7 +602,7 @@ void runMerge(StaticBvh::Merge::Work& work, const std::atomic<bool>& cancel) {
         for (const StaticPrimitive& p : *work.sources[s])
             if (!std::binary_search(removed.begin(), removed.end(), p.body)) merged->push_back(p);
     }
-    std::unique_ptr<StaticBvh::Part> part = makePart(std::move(merged), nullptr, &cancel);
+    std::unique_ptr<StaticBvh::Part> part = makePart(std::move(merged), nullptr, BuildQuality::Sah, &cancel);
     if (cancel.load(std::memory_order_relaxed)) return;
     {
         // What was removed while the tree was built; the landing applies what comes after.
@@ -595,7 +663,7 @@ void StaticBvh::build(std::vector<StaticPrimitive> primitives, TaskPool& pool) {
     scale_ = 0;
     pending_ = std::move(primitives);
     notePending(pending_);
-    flushPending(&pool);
+    flushPending(&pool, BuildQuality::Sah);
 }
 
 void StaticBvh::notePending(std::span<const StaticPrimitive> primitives) {
@@ -609,45 +677,61 @@ void StaticBvh::notePending(std::span<const StaticPrimitive> primitives) {
 
 void StaticBvh::insert(std::span<const StaticPrimitive> primitives, TaskPool& pool) {
     if (primitives.empty()) return;
-    ++generation_;
+    for (const StaticPrimitive& p : primitives) noteEdit(p.box);
     pending_.insert(pending_.end(), primitives.begin(), primitives.end());
     notePending(primitives);
-    if (pending_.size() >= kBatchPrimitives) commit(pool);
+    if (pending_.size() >= kBatchPrimitives) {  // the caller's time, not a step's: a tree that lasts
+        flushPending(&pool, BuildQuality::Sah);
+        landFinishedMerges();
+        startDueMerges(true, false);
+    }
 }
 
 void StaticBvh::remove(std::uint32_t body) {
-    ++generation_;
     if (body >= partOfBody_.size()) return;
     const std::uint32_t id = partOfBody_[body];
     partOfBody_[body] = kNoPart;
     if (id == kNoPart) return;
-    if (id == kPendingPart) {
+    if (id == kPendingPart) {  // its boxes are among the edits already, as inserted
         std::erase_if(pending_, [body](const StaticPrimitive& p) { return p.body == body; });
         return;
     }
-    if (Part* part = findPart(id)) tombstone(*part, body);
+    if (Part* part = findPart(id)) {
+        removedBoxes_.clear();
+        tombstone(*part, body, &removedBoxes_);
+        for (const Aabb& box : removedBoxes_) noteEdit(box);
+    }
+}
+
+void StaticBvh::noteEdit(const Aabb& box) {
+    if (editBoxes_.size() < kEditsTracked)
+        editBoxes_.push_back(box);
+    else
+        editsOverflowed_ = true;
 }
 
 void StaticBvh::commit(TaskPool& pool) {
-    flushPending(&pool);
+    ++commitsSinceFlush_;
+    flushPending(&pool, pending_.size() <= kQuickBuildMax ? BuildQuality::Quick : BuildQuality::Sah);
     landFinishedMerges();
-    startDueMerges(true);
+    startDueMerges(true, commitsSinceFlush_ > kQuietCommits);
 }
 
 void StaticBvh::settle(TaskPool& pool) {
-    flushPending(&pool);
+    flushPending(&pool, BuildQuality::Sah);
     landFinishedMerges();
     // Merges in flight are dropped and done again here: a test waiting on an idle-priority thread could wait for as
     // long as other programs keep the cores busy.
     dropMerges();
-    while (startDueMerges(false) > 0) landFinishedMerges();
+    while (startDueMerges(false, true) > 0) landFinishedMerges();
 }
 
-void StaticBvh::flushPending(TaskPool* pool) {
+void StaticBvh::flushPending(TaskPool* pool, BuildQuality quality) {
     if (pending_.empty()) return;
     auto source = std::make_shared<const std::vector<StaticPrimitive>>(std::move(pending_));
     pending_ = {};
-    std::unique_ptr<Part> part = makePart(std::move(source), pool);
+    std::unique_ptr<Part> part = makePart(std::move(source), pool, quality);
+    commitsSinceFlush_ = 0;
     part->id = std::uint32_t(mergedInto_.size());
     mergedInto_.push_back(part->id);
     for (const StaticPrimitive& p : *part->source) partOfBody_[p.body] = part->id;
@@ -708,7 +792,7 @@ void StaticBvh::landFinishedMerges() {
     }
 }
 
-std::size_t StaticBvh::startDueMerges(bool background) {
+std::size_t StaticBvh::startDueMerges(bool background, bool quiet) {
     // Parts of a tier wait until kMergeFanIn of them are idle; at most one merge per tier runs at a time, so a long
     // merge of large parts never holds up the quick merges of small ones.
     std::size_t started = 0;
@@ -729,13 +813,18 @@ std::size_t StaticBvh::startDueMerges(bool background) {
         if (tierBusy[tier]) continue;
         std::vector<Part*>& idle = idleByTier[tier];
         if (idle.size() >= kMergeFanIn) {
-            idle.resize(kMergeFanIn);  // the oldest, which were built first
+            // The widest first: every query that overlaps a part walks it, and a batch of edits scattered over the
+            // world overlaps every query. Areas within a factor of four count as equal and go oldest first, so a
+            // level loaded in order merges neighbours into compact parts that few queries touch.
+            std::stable_sort(idle.begin(), idle.end(),
+                             [](const Part* a, const Part* b) { return areaClass(*a) > areaClass(*b); });
+            idle.resize(kMergeFanIn);
             startMerge(std::move(idle), tier, background);
             ++started;
             continue;
         }
         for (Part* p : idle)
-            if (std::uint64_t(p->tombstones) * 4 > p->size()) {
+            if (std::uint64_t(p->tombstones) * 4 > p->size() || (quiet && p->quick)) {
                 startMerge({p}, tier, background);
                 ++started;
                 break;
@@ -785,7 +874,18 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
     meshTriangles.clear();
     droppedHits_ = 0;
     const std::uint32_t n = moving.size();
-    if (n == 0 || treeViews_.empty()) return;
+    // Edits spoil only the kept hits of bodies whose grown boxes they overlap; past kEditsTracked, all of them.
+    if (editsOverflowed_) ++generation_;
+    if (n == 0 || treeViews_.empty()) {
+        if (!editBoxes_.empty()) ++generation_;
+        editBoxes_.clear();
+        editsOverflowed_ = false;
+        return;
+    }
+    queryEdits_.clear();
+    if (!editsOverflowed_) queryEdits_.swap(editBoxes_);
+    editBoxes_.clear();
+    editsOverflowed_ = false;
 
     const std::size_t chunkCount = TaskPool::chunkCount(n, kQueryChunk);
     if (chunks_.size() < chunkCount) chunks_.resize(chunkCount);
@@ -803,12 +903,26 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
         const bool keptValid = out.keptGeneration == generation_ && out.keptBegin == begin && out.keptEnd == end;
         out.grown.resize(end - begin);
         out.keptStart.resize(end - begin + 1);
+        WorkerScratch& scratch = workers_[std::size_t(worker)];
         if (!keptValid) {
             std::fill(out.grown.begin(), out.grown.end(), kNoBox);
             std::fill(out.keptStart.begin(), out.keptStart.end(), 0u);
             out.kept.clear();
+        } else if (!queryEdits_.empty()) {
+            // A body whose grown box an edit overlaps looks again (asleep, once it wakes). The edits near the
+            // chunk's union of grown boxes first: most edits are far from most chunks.
+            Box chunkBox;
+            for (const Aabb& g : out.grown) chunkBox.grow(toBox(g));
+            const Aabb reach = chunkBox.aabb();
+            std::vector<Aabb>& near = scratch.edits;
+            near.clear();
+            for (const Aabb& e : queryEdits_)
+                if (boxesOverlap(e, reach)) near.push_back(e);
+            if (!near.empty())
+                for (Aabb& g : out.grown)
+                    if (std::any_of(near.begin(), near.end(), [&](const Aabb& e) { return boxesOverlap(e, g); }))
+                        g = kNoBox;
         }
-        WorkerScratch& scratch = workers_[std::size_t(worker)];
         std::vector<std::uint64_t>& hits = scratch.hits;
         const PairFilter& mf = filter.moving;
         const auto boxOf = [&](std::uint32_t i) {

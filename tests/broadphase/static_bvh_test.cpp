@@ -444,6 +444,105 @@ TEST(StaticBvh, KeptHitsFollowMovingBoxes) {
     EXPECT_GT(total, 40u * 1000);  // the boxes touch the terrain: the test means something
 }
 
+// Edits spoil only the kept hits of the bodies whose grown boxes they overlap (static_bvh.h). Boxes that rest or
+// drift inside their grown boxes, some asleep and waking, see statics added on top of them, removed from under
+// them, moved (an id removed and inserted elsewhere) and edited far away; a query with no moving boxes between
+// edits, and more edits than are tracked one by one, in between. Every answer must be the brute force's.
+TEST(StaticBvh, KeptHitsSeeEveryEditThatReachesThem) {
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<float> u(-1, 1);
+    const auto boxAt = [](float x, float y, float z, float h) {
+        return Aabb{{x - h, y - h, z - h}, {x + h, y + h, z + h}};
+    };
+    // Statics: unit boxes scattered over a 60 m floor, one primitive each; `live` by body id.
+    std::vector<std::vector<StaticPrimitive>> live(StaticBvh::kEditsTracked + 4000);
+    const auto place = [&](std::uint32_t body, const Aabb& box) { live[body] = {{box, body, kWholeBody}}; };
+    std::vector<StaticPrimitive> all;
+    for (std::uint32_t b = 0; b < 3000; ++b) {
+        place(b, boxAt(30 * u(rng), 0.5f * u(rng), 30 * u(rng), 0.5f));
+        all.push_back(live[b][0]);
+    }
+    TaskPool pool(2);
+    StaticBvh bvh;
+    bvh.build(all, pool);
+    // Moving boxes resting just above the floor, a tenth of them asleep at a time.
+    Bounds moving = randomBoxes(1500, 30, 0.5f, 1.5f, 32);
+    std::vector<std::uint8_t> flags(moving.size(), 0);
+    StaticQueryFilter filter;
+    filter.moving.flags = flags.data();
+    filter.moving.asleepBit = 1;
+    const auto check = [&](const char* when, int call) {
+        std::vector<StaticPrimitive> reference;
+        for (const auto& p : live) reference.insert(reference.end(), p.begin(), p.end());
+        ASSERT_EQ(flatten(runQuery(bvh, moving, pool, filter)), bruteForce(moving, reference, filter))
+            << when << ", call " << call;
+    };
+    std::uint32_t nextBody = 3000;
+    std::size_t touchedByEdits = 0;
+    for (int call = 0; call < 30; ++call) {
+        for (std::uint32_t i = 0; i < moving.size(); ++i) {  // drifts far inside the grown boxes
+            const float d = 0.001f * u(rng);
+            moving.minX[i] += d, moving.maxX[i] += d;
+            if (rng() % 10 == 0) flags[i] ^= 1;
+        }
+        // Edits at a moving box (on top of it, or of the statics under it) and far away, and moves of an id.
+        for (int e = 0; e < 20; ++e) {
+            const std::uint32_t i = rng() % moving.size();
+            const float x = 0.5f * (moving.minX[i] + moving.maxX[i]), z = 0.5f * (moving.minZ[i] + moving.maxZ[i]);
+            switch (rng() % 4) {
+                case 0: {  // a new static overlapping the moving box
+                    place(nextBody, boxAt(x, moving.minY[i], z, 0.3f));
+                    bvh.insert(live[nextBody], pool);
+                    ++nextBody;
+                    ++touchedByEdits;
+                    break;
+                }
+                case 1: {  // remove whatever static the moving box overlaps
+                    for (std::uint32_t b = 0; b < nextBody; ++b)
+                        if (!live[b].empty() && boxOverlaps(moving, i, live[b][0].box)) {
+                            bvh.remove(b);
+                            live[b].clear();
+                            ++touchedByEdits;
+                            break;
+                        }
+                    break;
+                }
+                case 2: {  // move a static id from somewhere to this box
+                    const std::uint32_t b = rng() % nextBody;
+                    bvh.remove(b);
+                    place(b, boxAt(x, moving.minY[i], z, 0.2f));
+                    bvh.insert(live[b], pool);
+                    ++touchedByEdits;
+                    break;
+                }
+                default: {  // far away
+                    place(nextBody, boxAt(200 + 10 * u(rng), 0, 10 * u(rng), 0.5f));
+                    bvh.insert(live[nextBody], pool);
+                    ++nextBody;
+                }
+            }
+        }
+        if (call == 10) {  // no moving boxes: the query returns early, and the edits still count after it
+            const Bounds none;
+            EXPECT_TRUE(flatten(runQuery(bvh, none, pool)).empty());
+        }
+        if (call == 20) {  // more edits than are tracked: every body looks again
+            for (std::uint32_t e = 0; e < StaticBvh::kEditsTracked; ++e) {
+                place(nextBody, boxAt(300 + 30 * u(rng), 0, 30 * u(rng), 0.5f));
+                bvh.insert(live[nextBody], pool);
+                ++nextBody;
+            }
+            const std::uint32_t i = rng() % moving.size();
+            place(nextBody, boxAt(0.5f * (moving.minX[i] + moving.maxX[i]), moving.minY[i],
+                                  0.5f * (moving.minZ[i] + moving.maxZ[i]), 0.3f));
+            bvh.insert(live[nextBody], pool);
+            ++nextBody;
+        }
+        check("after edits", call);
+    }
+    EXPECT_GT(touchedByEdits, 300u);  // the edits reached the moving boxes: the test means something
+}
+
 // A world that adds many statics one at a time (a level loading) builds its parts as it goes: a commit never has
 // more than a batch left to build. Background merges then fold the batches into fewer, larger parts; whatever state
 // they are in when a query runs, its answer is the brute force's, and removals made while a merge reads its parts
