@@ -147,6 +147,15 @@ const std::uint32_t* BroadPhaseStage::movingInCellOrder(const BodyStorage& stora
 
 std::uint32_t BroadPhaseStage::staticPrimitiveCount() const { return bvh_->primitiveCount(); }
 
+BroadPhaseStage::StepInProgress::StepInProgress(BroadPhaseStage& stage, bool takesEveryCore)
+    : bvh_(takesEveryCore ? stage.bvh_.get() : nullptr) {
+    if (bvh_ != nullptr) bvh_->stepBegins();
+}
+
+BroadPhaseStage::StepInProgress::~StepInProgress() {
+    if (bvh_ != nullptr) bvh_->stepEnds();
+}
+
 const StaticBvh& BroadPhaseStage::staticBvh(TaskPool& pool) {
     bvh_->commit(pool);
     return *bvh_;

@@ -100,6 +100,18 @@ public:
     /// The static BVH with the static edits made since the last step committed, for the scene queries (src/query/)
     /// and continuous collision, which then only read it. Not thread-safe: the queries call it under their own lock.
     const StaticBvh& staticBvh(TaskPool& pool);
+    /// Holds the static tree's background merges back for as long as it lives, the step's own time, when the step
+    /// takes every core (`takesEveryCore`; see StaticBvh::StepGate). A step that leaves a core free leaves it to them.
+    class StepInProgress {
+    public:
+        StepInProgress(BroadPhaseStage& stage, bool takesEveryCore);
+        ~StepInProgress();
+        StepInProgress(const StepInProgress&) = delete;
+        StepInProgress& operator=(const StepInProgress&) = delete;
+
+    private:
+        StaticBvh* bvh_;  ///< null when the merges may run
+    };
 
 private:
     std::unique_ptr<SweepAndPrune> sap_;

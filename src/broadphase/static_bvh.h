@@ -12,14 +12,15 @@
 //    next step builds at most the last batch, with the quick build (Morton order) when it is small.
 //  - remove() tombstones the body's primitives in place: their boxes become empty (min = +inf, max = -inf), so
 //    queries skip them without a check of their own; node bounds stay conservative.
-//  - Parts are merged off the step, on background threads under the idle scheduling policy: parts of similar
-//    size (a tier: sizes within a factor kMergeFanIn) are merged kMergeFanIn at a time into one of the next tier,
-//    widest first (a batch of edits scattered over the world is walked by every query), and a part with more than
-//    a quarter of its lanes tombstoned, or a quick part once edits pause, is rebuilt alone. A merge reads only the
-//    parts' immutable primitive lists; the parts stay in use until the next commit() after it finished swaps its result
-//    in (removals made meanwhile go to the merge's log: the merge applies them to its result once its tree is built,
-//    the commit only those made after that). So the forest holds O(kMergeFanIn log n) parts, every
-//    primitive is rebuilt O(log n) times in the background, and a step never waits for a merge.
+//  - Parts are merged off the step, on background threads under the idle scheduling policy (and only between steps
+//    when a step takes every core: StepGate): parts of similar size (a tier: sizes within a factor kMergeFanIn) are
+//    merged kMergeFanIn at a time into one of the next tier, widest first (a batch of edits scattered over the world
+//    is walked by every query), and a part with more than a quarter of its lanes tombstoned, or a quick part once
+//    edits pause, is rebuilt alone. A merge reads only the parts' immutable primitive lists; the parts stay in use
+//    until the next commit() after it finished swaps its result in (removals made meanwhile go to the merge's log: the
+//    merge applies them to its result once its tree is built, the commit only those made after that). So the forest
+//    holds O(kMergeFanIn log n) parts, every primitive is rebuilt O(log n) times in the background, and a step never
+//    waits for a merge.
 // Results never depend on which part holds a primitive (every query sorts its hits), so when a merge lands, which
 // depends on the machine's timing, never changes a result; merges do not change the content, so they keep the
 // queries' kept hits valid.
@@ -31,8 +32,10 @@
 // A heightfield's primitives are its triangles, numbered as src/shapes/shape.h says (heightfieldTriangle).
 #include <array>
 #include <bit>
+#include <condition_variable>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <span>
 #include <vector>
 
@@ -167,6 +170,17 @@ public:
     void query(const Bounds& moving, const StaticQueryFilter& filter, TaskPool& pool, std::vector<BodyPair>& bodyPairs,
                std::vector<MeshPair>& meshPairs, std::vector<std::uint32_t>& meshTriangles);
 
+    /// Background merges wait while a step runs (see MergeControl in static_bvh.cpp); the world holds the gate
+    /// shut for the length of each step that takes every core.
+    struct StepGate {
+        mutable std::mutex mutex;
+        mutable std::condition_variable open;
+        bool stepping = false;
+        void set(bool steppingNow);
+    };
+    void stepBegins() { gate_->set(true); }
+    void stepEnds() { gate_->set(false); }
+
     /// Static candidates the last query dropped past the budget (limits::kStaticHitsPerBody); 0 in any sane scene.
     std::uint64_t droppedHits() const { return droppedHits_; }
 
@@ -226,6 +240,7 @@ private:
 
     std::vector<std::unique_ptr<Part>> parts_;
     std::vector<std::unique_ptr<Merge>> merges_;
+    std::shared_ptr<StepGate> gate_;                               ///< shared with the jobs in flight
     std::vector<std::unique_ptr<BackgroundWorker>> mergeWorkers_;  ///< by tier: one merge per tier runs at a time
     std::vector<const Tree*> treeViews_;
     /// Each part's box as it was when the part came in (tombstones only shrink a part, so it stays conservative).

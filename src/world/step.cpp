@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "rubble/limits.h"
@@ -285,6 +286,8 @@ void finishStep(World::Impl& w, StepContext& step, detail::Clock::time_point beg
 void World::step(float dt) {
     requireWithin("World::step", "dt", dt, limits::kMinTimeStep, limits::kMaxTimeStep, "s");
     Impl& w = *impl_;
+    static const int cores = static_cast<int>(std::thread::hardware_concurrency());  // a system call: once
+    const detail::BroadPhaseStage::StepInProgress stepInProgress(w.broadPhase, w.pool->threadCount() >= cores);
     // The pool's workers set the same mode for each chunk they run (parallel.cpp).
     const simd::FlushSubnormals flushSubnormals;
     const auto begin = detail::Clock::now();

@@ -6,12 +6,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <functional>
 #include <memory>
 #include <numeric>
 #include <random>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -586,6 +588,31 @@ TEST(StaticBvh, ForestBuiltWhileAddingAndMergedOffTheQuery) {
     EXPECT_EQ(s.pending, 0u);
     EXPECT_LT(s.parts, StaticBvh::kMergeFanIn * 3) << "a settled forest has fewer than kMergeFanIn parts per tier";
     EXPECT_LE(std::uint64_t(s.tombstones) * 4, s.primitives);
+}
+
+// While a step that takes every core runs, background merges wait at their check points (their page faults and
+// unmaps would stall the step's threads); once it ends they go on. A merge of eight small batches takes a few
+// milliseconds, so one that ignored the gate would have landed in the tenth of a second the test waits.
+TEST(StaticBvh, MergesWaitWhileAStepRuns) {
+    TaskPool pool(2);
+    StaticBvh bvh;
+    bvh.stepBegins();
+    std::vector<StaticPrimitive> all;
+    for (std::uint32_t b = 0; b < StaticBvh::kMergeFanIn * StaticBvh::kBatchPrimitives; ++b) {
+        const auto x = float(b % 128), z = float(b / 128);
+        all.push_back({{{x, 0, z}, {x + 0.5f, 0.5f, z + 0.5f}}, b, kWholeBody});
+        bvh.insert({&all.back(), 1}, pool);
+    }
+    ASSERT_EQ(bvh.stats().parts, StaticBvh::kMergeFanIn);
+    EXPECT_EQ(bvh.stats().merging, StaticBvh::kMergeFanIn) << "the full batches are due for a merge";
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    bvh.commit(pool);
+    EXPECT_EQ(bvh.stats().parts, StaticBvh::kMergeFanIn) << "a merge landed while a step ran";
+    bvh.stepEnds();
+    bvh.settle(pool);
+    EXPECT_EQ(bvh.stats().parts, 1u);
+    const Bounds moving = randomBoxes(500, 64, -1, 1, 5);
+    EXPECT_EQ(flatten(runQuery(bvh, moving, pool)), bruteForce(moving, all));
 }
 
 TEST(StaticBvh, EmptyTreeAndEmptyQuery) {
