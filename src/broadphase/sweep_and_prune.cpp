@@ -283,11 +283,10 @@ bool SweepAndPrune::sortByInsertion(const float* minAxis, const std::uint32_t* s
             [&](std::size_t k, std::uint64_t& keep, std::uint64_t& move) { place(k, prevOrder[k], keep, move); });
     } else {
         // Bodies came or went: follow each one through its slot, which stays with the body across swap-removes.
-        denseOfSlot_.resize(slotCount);
+        // Every entry is kAbsent between calls: this call resets the ones it writes (all at this step's bodies'
+        // slots), so that a world of a million statics does not pay for every slot whenever a body comes or goes.
+        if (denseOfSlot_.size() < slotCount) denseOfSlot_.resize(slotCount, kAbsent);
         std::uint32_t* denseOfSlot = denseOfSlot_.data();
-        pool.forChunks(slotCount, kStreamChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-            std::fill(denseOfSlot + begin, denseOfSlot + end, kAbsent);
-        });
         // Slots are distinct, so the chunks write disjoint entries.
         pool.forChunks(n, kStreamChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
             for (std::size_t i = begin; i < end; ++i) denseOfSlot[slotOfDense[i]] = static_cast<std::uint32_t>(i);
@@ -311,6 +310,9 @@ bool SweepAndPrune::sortByInsertion(const float* minAxis, const std::uint32_t* s
                                         ? kNoItem
                                         : makeItem(minAxis[i], static_cast<std::uint32_t>(i));
                          });
+        pool.forChunks(n, kStreamChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+            for (std::size_t i = begin; i < end; ++i) denseOfSlot[slotOfDense[i]] = kAbsent;
+        });
     }
     const std::size_t added = newItems_.size();
     if (added > n / kNewBodiesDivisor) return false;

@@ -58,7 +58,7 @@ private:
     // each dense index, which together name last step's order by slot. Everything else is scratch.
     AlignedVector<std::uint32_t> prevSlotOfDense_;
     // Per slot: dense index this step, or a marker for "not present" / "already placed by the kept order".
-    std::vector<std::uint32_t> denseOfSlot_;
+    std::vector<std::uint32_t> denseOfSlot_;  ///< kAbsent between calls
 
     // Sort items: sortable key of the box minimum << 32 | dense index. Ordering the packed integer orders by
     // (minimum, dense index), a total order, so insertion and radix sorts produce the same sequence.
