@@ -470,6 +470,7 @@ struct StaticBvh::Part {
     std::uint32_t tombstones = 0;               ///< lanes
     bool merging = false;                       ///< a merge in flight reads it
     bool quick = false;                         ///< built by the quick build: rebuilt with the SAH once edits pause
+    int areaClass = 0;                          ///< of its root box as built (see areaClassOf)
     std::shared_ptr<MergeRemovalLog> mergeLog;  ///< while merging: where its removals go for the merge's result
 
     std::uint32_t size() const { return std::uint32_t(tree.primitives.size()); }
@@ -538,6 +539,15 @@ namespace {
 constexpr std::uint32_t kNoPart = ~0u;
 constexpr std::uint32_t kPendingPart = ~0u - 1;
 
+/// Half the surface area of a tree's root box, as a power of four (areas below 1 m^2 count as 1 m^2).
+int areaClassOf(const StaticBvh::Tree& tree) {
+    if (tree.nodes.empty()) return 0;
+    Box box;
+    for (int k = 0; k < 4; ++k) box.grow(toBox(tree.nodes[0].box(k)));
+    const float area = box.halfArea();
+    return area > 1 ? std::ilogb(area) / 2 : 0;  // a NaN area counts as small, an infinite one as the widest
+}
+
 /// Builds a part over `source` (its id is set by the caller).
 std::unique_ptr<StaticBvh::Part> makePart(std::shared_ptr<const std::vector<StaticPrimitive>> source, TaskPool* pool,
                                           BuildQuality quality, const MergeControl* control = nullptr) {
@@ -546,6 +556,7 @@ std::unique_ptr<StaticBvh::Part> makePart(std::shared_ptr<const std::vector<Stat
     buildTreeUnlessCancelled(part->tree, *source, pool, quality, control);
     if (control != nullptr && !control->proceed()) return part;
     const StaticBvh::Tree& t = part->tree;
+    part->areaClass = areaClassOf(t);
     part->byBody.reserve(t.primitives.size());
     for (std::size_t i = 0; i < t.nodes.size(); ++i)
         for (int k = 0; k < 4; ++k)
@@ -580,14 +591,6 @@ bool tombstone(StaticBvh::Part& part, std::uint32_t body, std::vector<Aabb>* rem
         }
     }
     return found;
-}
-
-/// Half the surface area of a part's root box, as a power of four (areas below 1 m^2 count as 1 m^2).
-int areaClass(const StaticBvh::Part& part) {
-    Box box;
-    for (int k = 0; k < 4; ++k) box.grow(toBox(part.tree.nodes[0].box(k)));
-    const float area = box.halfArea();
-    return area > 1 ? std::ilogb(area) / 2 : 0;  // a NaN area counts as small, an infinite one as the widest
 }
 
 /// Tier of a part of `size` live primitives: sizes within a factor kMergeFanIn share a tier.
@@ -854,7 +857,7 @@ std::size_t StaticBvh::startDueMerges(bool background, bool quiet) {
             // world overlaps every query. Areas within a factor of four count as equal and go oldest first, so a
             // level loaded in order merges neighbours into compact parts that few queries touch.
             std::stable_sort(idle.begin(), idle.end(),
-                             [](const Part* a, const Part* b) { return areaClass(*a) > areaClass(*b); });
+                             [](const Part* a, const Part* b) { return a->areaClass > b->areaClass; });
             idle.resize(kMergeFanIn);
             startMerge(std::move(idle), tier, background);
             ++started;

@@ -18,6 +18,10 @@ namespace {
 // Per-slot markers in denseOfSlot_; dense indices are always below both.
 constexpr std::uint32_t kAbsent = 0xFFFFFFFFu;
 constexpr std::uint32_t kPlaced = 0xFFFFFFFEu;
+// Up to this many bodies, and with this many slots per body or more (statics hold slots too), the markers by slot
+// are a sorted table rather than an array over every slot.
+constexpr std::uint32_t kSparseSlotsMax = 4096;
+constexpr std::size_t kSparseSlotRatio = 16;
 // Not a valid item (its dense index would be kAbsent): marks dropped entries before compaction.
 constexpr std::uint64_t kNoItem = ~std::uint64_t{0};
 
@@ -283,36 +287,55 @@ bool SweepAndPrune::sortByInsertion(const float* minAxis, const std::uint32_t* s
             [&](std::size_t k, std::uint64_t& keep, std::uint64_t& move) { place(k, prevOrder[k], keep, move); });
     } else {
         // Bodies came or went: follow each one through its slot, which stays with the body across swap-removes.
-        // Every entry is kAbsent between calls: this call resets the ones it writes (all at this step's bodies'
-        // slots), so that a world of a million statics does not pay for every slot whenever a body comes or goes.
-        if (denseOfSlot_.size() < slotCount) denseOfSlot_.resize(slotCount, kAbsent);
-        std::uint32_t* denseOfSlot = denseOfSlot_.data();
-        // Slots are distinct, so the chunks write disjoint entries.
-        pool.forChunks(n, kStreamChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-            for (std::size_t i = begin; i < end; ++i) denseOfSlot[slotOfDense[i]] = static_cast<std::uint32_t>(i);
-        });
+        // The markers live in an array by slot, whose entries are kAbsent between calls (this call resets the ones it
+        // writes, all at this step's bodies' slots) or, for a few bodies among many slots (a million statics), in a
+        // table sorted by slot: growing the array to every slot of such a world cost 4 ms when its count grew.
+        const bool sparse = n <= kSparseSlotsMax && slotCount > kSparseSlotRatio * std::size_t(n);
+        std::uint32_t* denseOfSlot = nullptr;
+        if (sparse) {
+            slotTable_.resize(n);
+            for (std::uint32_t i = 0; i < n; ++i) slotTable_[i] = std::uint64_t(slotOfDense[i]) << 32 | i;
+            std::sort(slotTable_.begin(), slotTable_.end());
+            slotMarks_.resize(n);
+            for (std::uint32_t j = 0; j < n; ++j) slotMarks_[j] = static_cast<std::uint32_t>(slotTable_[j]);
+        } else {
+            if (denseOfSlot_.size() < slotCount) denseOfSlot_.resize(slotCount, kAbsent);
+            denseOfSlot = denseOfSlot_.data();
+            // Slots are distinct, so the chunks write disjoint entries.
+            pool.forChunks(n, kStreamChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+                for (std::size_t i = begin; i < end; ++i) denseOfSlot[slotOfDense[i]] = static_cast<std::uint32_t>(i);
+            });
+        }
+        // The marker of a slot, or null for a slot no body of this step holds.
+        const auto markerOf = [&](std::uint32_t slot) -> std::uint32_t* {
+            if (!sparse) return slot < slotCount ? denseOfSlot + slot : nullptr;
+            const auto it = std::lower_bound(slotTable_.begin(), slotTable_.end(), std::uint64_t(slot) << 32);
+            if (it == slotTable_.end() || (*it >> 32) != slot) return nullptr;
+            return slotMarks_.data() + (it - slotTable_.begin());
+        };
         // Last step's order, mapped to this step's dense indices; bodies removed since then drop out.
         produceCompacted(prevCount, pool, merged_.data(), chunkCounts_, &items_, newItems_,
                          [&](std::size_t k, std::uint64_t& keep, std::uint64_t& move) {
                              keep = move = kNoItem;
-                             const std::uint32_t slot = prevSlotOfDense[prevOrder[k]];
-                             if (slot >= slotCount) return;
-                             const std::uint32_t d = denseOfSlot[slot];
-                             if (d >= n) return;           // absent (or, defensively, a slot seen twice)
-                             denseOfSlot[slot] = kPlaced;  // each slot occurs once in the old order: disjoint writes
+                             std::uint32_t* marker = markerOf(prevSlotOfDense[prevOrder[k]]);
+                             if (marker == nullptr) return;
+                             const std::uint32_t d = *marker;
+                             if (d >= n) return;  // absent (or, defensively, a slot seen twice)
+                             *marker = kPlaced;   // each slot occurs once in the old order: disjoint writes
                              place(k, d, keep, move);
                          });
         // Bodies added since then: their slot was not in the old order.
         produceCompacted(n, pool, merged_.data(), chunkCounts_, nullptr, newItems_,
                          [&](std::size_t i, std::uint64_t& keep, std::uint64_t& move) {
                              keep = kNoItem;
-                             move = denseOfSlot[slotOfDense[i]] == kPlaced
+                             move = *markerOf(slotOfDense[i]) == kPlaced
                                         ? kNoItem
                                         : makeItem(minAxis[i], static_cast<std::uint32_t>(i));
                          });
-        pool.forChunks(n, kStreamChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-            for (std::size_t i = begin; i < end; ++i) denseOfSlot[slotOfDense[i]] = kAbsent;
-        });
+        if (!sparse)
+            pool.forChunks(n, kStreamChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+                for (std::size_t i = begin; i < end; ++i) denseOfSlot[slotOfDense[i]] = kAbsent;
+            });
     }
     const std::size_t added = newItems_.size();
     if (added > n / kNewBodiesDivisor) return false;

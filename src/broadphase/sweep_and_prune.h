@@ -59,6 +59,9 @@ private:
     AlignedVector<std::uint32_t> prevSlotOfDense_;
     // Per slot: dense index this step, or a marker for "not present" / "already placed by the kept order".
     std::vector<std::uint32_t> denseOfSlot_;  ///< kAbsent between calls
+    // The same for a few bodies among many slots: (slot << 32 | dense index) sorted, and each one's marker.
+    std::vector<std::uint64_t> slotTable_;
+    std::vector<std::uint32_t> slotMarks_;
 
     // Sort items: sortable key of the box minimum << 32 | dense index. Ordering the packed integer orders by
     // (minimum, dense index), a total order, so insertion and radix sorts produce the same sequence.
