@@ -70,11 +70,6 @@ struct SortedView {
     const std::uint32_t* body;
 };
 
-/// Calls hit(j) for every slot j in [j0, j1) whose box overlaps slot i's, ascending. One SIMD batch of candidates
-/// per step; the arrays are padded by a batch so the last load stays in bounds, and lanes past j1 are masked off.
-/// With a row's x cells `slotX` (ascending in [j0, j1)), stops after the first batch that reaches past x cell xHi:
-/// later slots of the row lie further right and cannot be neighbours. Once slot i's search has spent its budget
-/// (`pairs`), the candidates left are counted as dropped, not tested.
 /// Counts the candidates [j, j1) of a search that spent its budget as dropped (with `slotX`, those up to x cell xHi).
 /// Out of line: only piles get here, and inlined it would weigh on the search loop of every scene.
 [[gnu::noinline, gnu::cold]] void skipCandidates(ChunkPairs& pairs, std::uint32_t j, std::uint32_t j1,
@@ -84,6 +79,11 @@ struct SortedView {
     pairs.skip(end - j);
 }
 
+/// Calls hit(j) for every slot j in [j0, j1) whose box overlaps slot i's, ascending. One SIMD batch of candidates
+/// per step; the arrays are padded by a batch so the last load stays in bounds, and lanes past j1 are masked off.
+/// With a row's x cells `slotX` (ascending in [j0, j1)), stops after the first batch that reaches past x cell xHi:
+/// later slots of the row lie further right and cannot be neighbours. Once slot i's search has spent its budget
+/// (`pairs`), the candidates left are counted as dropped, not tested.
 template <class Hit>
 inline void forOverlapping(const SortedView& s, std::uint32_t i, std::uint32_t j0, std::uint32_t j1,
                            const std::uint32_t* slotX, std::uint32_t xHi, const simd::FloatW& laneIndex,

@@ -720,11 +720,7 @@ void StaticBvh::insert(std::span<const StaticPrimitive> primitives, TaskPool& po
     for (const StaticPrimitive& p : primitives) noteEdit(p.box);
     pending_.insert(pending_.end(), primitives.begin(), primitives.end());
     notePending(primitives);
-    if (pending_.size() >= kBatchPrimitives) {  // the caller's time, not a step's: a tree that lasts
-        flushPending(&pool, BuildQuality::Sah);
-        landFinishedMerges();
-        startDueMerges(true, false);
-    }
+    if (pending_.size() >= kBatchPrimitives) commitBuilding(pool, BuildQuality::Sah);  // the caller's time
 }
 
 void StaticBvh::remove(std::uint32_t body) {
@@ -751,8 +747,12 @@ void StaticBvh::noteEdit(const Aabb& box) {
 }
 
 void StaticBvh::commit(TaskPool& pool) {
+    commitBuilding(pool, pending_.size() <= kQuickBuildMax ? BuildQuality::Quick : BuildQuality::Sah);
+}
+
+void StaticBvh::commitBuilding(TaskPool& pool, BuildQuality quality) {
     ++commitsSinceFlush_;
-    flushPending(&pool, pending_.size() <= kQuickBuildMax ? BuildQuality::Quick : BuildQuality::Sah);
+    flushPending(&pool, quality);
     landFinishedMerges();
     startDueMerges(true, commitsSinceFlush_ > kQuietCommits);
 }

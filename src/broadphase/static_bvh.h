@@ -228,6 +228,8 @@ private:
     void notePending(std::span<const StaticPrimitive> primitives);
     void noteEdit(const Aabb& box);
     void flushPending(TaskPool* pool, BuildQuality quality);
+    /// commit() with the waiting primitives built by `quality`.
+    void commitBuilding(TaskPool& pool, BuildQuality quality);
     void addPart(std::unique_ptr<Part> part);
     Part* findPart(std::uint32_t id);
     void landFinishedMerges();
