@@ -88,7 +88,7 @@ struct FrozenScene {
         }
         Bounds bounds;
         updateBounds(storage.moving, table, BoundsParams{params.dt, params.margin}, pool, bounds);
-        broad.findPairs(bounds, storage, BroadPhaseKind::Auto, pool, candidates);
+        broad.findPairs(bounds, storage, BroadPhaseKind::Auto, {}, pool, candidates);
     }
 };
 

@@ -1,8 +1,10 @@
-// Body storage: creation, O(1) removal with swap-remove, and the state hash, at game-world sizes; and a large static
-// world edited between steps (issue 38: no step of it may take more than twice the median or 1 ms).
+// Body storage: creation, O(1) removal with swap-remove, and the state hash, at game-world sizes; a large static
+// world edited between steps (issue 38: no step of it may take more than twice the median or 1 ms); and a large
+// world asleep but for a few bodies.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -101,6 +103,47 @@ void staticWorldEdits(benchmark::State& state) {
     state.counters["threads"] = static_cast<double>(state.range(1));
 }
 
+/// range(0) spheres resting asleep on a static floor (a field of debris in a game), and 100 balls dropped onto it
+/// one after another, each waking the few it hits: one iteration is one step, at range(1) threads. A world that
+/// sleeps should cost its awake bodies, not its sleepers (issue 38). The counters give the median and worst step.
+void sleepingField(benchmark::State& state) {
+    const auto count = static_cast<int>(state.range(0));
+    rubble::WorldSettings settings{.threads = static_cast<int>(state.range(1))};
+    settings.effects = rubble::EffectSet::defaults().with(rubble::Effect::Sleeping);
+    rubble::World world(settings);
+    const rubble::ShapeId ball = world.createShape(rubble::SphereDef{0.5f});
+    const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(count))));
+    rubble::BodyDef floor;
+    floor.type = rubble::BodyType::Static;
+    floor.shape = world.createShape(rubble::BoxDef{{0.6f * side + 10, 1, 0.6f * side + 10}});
+    floor.position = {0, -1, 0};
+    world.createBody(floor);
+    rubble::BodyDef sphere;
+    sphere.shape = ball;
+    for (int i = 0; i < count; ++i) {
+        sphere.position = {1.2f * float(i % side - side / 2), 0.5f, 1.2f * float(i / side - side / 2)};
+        world.createBody(sphere);
+    }
+    // Resting from the start, they fall asleep after timeToSleep (0.5 s).
+    for (int i = 0; i < 45; ++i) world.step(1.0f / 60);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> across(-0.6f * side, 0.6f * side);
+    std::vector<double> stepMs;
+    int step = 0;
+    for (auto _ : state) {
+        if (step++ % 6 == 0) {
+            sphere.position = {across(rng), 6, across(rng)};
+            world.createBody(sphere);
+        }
+        world.step(1.0f / 60);
+        stepMs.push_back(world.lastProfile().stepMs);
+    }
+    std::sort(stepMs.begin(), stepMs.end());
+    state.counters["median_ms"] = stepMs[stepMs.size() / 2];
+    state.counters["worst_ms"] = stepMs.back();
+    state.counters["asleep"] = static_cast<double>(world.lastProfile().sleepingBodies);
+}
+
 }  // namespace
 
 BENCHMARK(createBodies)->Arg(100'000)->Unit(benchmark::kMillisecond);
@@ -109,6 +152,12 @@ BENCHMARK(hashState)->Arg(100'000)->Unit(benchmark::kMillisecond);
 BENCHMARK(staticWorldEdits)
     ->ArgNames({"edits", "threads"})
     ->ArgsProduct({{0, 100, 1000}, {1, 2}})
+    ->Iterations(600)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(sleepingField)
+    ->ArgNames({"bodies", "threads"})
+    ->ArgsProduct({{250'000, 1'000'000}, {1, 2}})
     ->Iterations(600)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();

@@ -69,14 +69,20 @@ void ShapeBoundsTable::set(std::uint32_t shape, const ShapeBoundsInfo& info) {
 }
 
 void updateBounds(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,
-                  TaskPool& pool, Bounds& out) {
+                  TaskPool& pool, Bounds& out, bool keepSleepers) {
     const std::size_t n = bodies.size();
     out.resize(n);
+    const std::uint8_t* flags = bodies.flags.data();
+    const auto allAsleep = [&](std::size_t i) {
+        std::uint8_t awake = 0;
+        for (std::size_t k = 0; k < simd::kLanes; ++k) awake |= static_cast<std::uint8_t>(~flags[i + k]);
+        return (awake & kFlagAsleep) == 0;
+    };
     pool.forChunks(n, kChunkSize, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         std::size_t i = begin;
         for (const std::size_t wideEnd = begin + simd::roundDownToLanes<FloatW>(end - begin); i < wideEnd;
              i += simd::kLanes)
-            boundsKernel<FloatW>(bodies, shapes, params, out, i);
+            if (!keepSleepers || !allAsleep(i)) boundsKernel<FloatW>(bodies, shapes, params, out, i);
         for (; i < end; ++i) boundsKernel<float>(bodies, shapes, params, out, i);
     });
 }

@@ -27,9 +27,13 @@ struct BoundsParams {
     float margin = 0.0f;  ///< added on every side
 };
 
-/// Writes the world boxes of all moving bodies into `out` (resized to the body count).
+/// Writes the world boxes of all moving bodies into `out` (resized to the body count). With `keepSleepers`, the
+/// caller vouches that `out` holds the boxes of these same rows from a call with the same params and that no body
+/// fell asleep or woke since: a batch of lanes that holds only sleepers is left as it is (a sleeper's pose and zero
+/// velocity do not change while it sleeps, so its box is the one computed before, to the bit), so that a world that
+/// sleeps pays for its awake bodies.
 void updateBounds(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,
-                  TaskPool& pool, Bounds& out);
+                  TaskPool& pool, Bounds& out, bool keepSleepers = false);
 /// The same, one body at a time, as the reference for the SIMD path.
 void updateBoundsScalar(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,
                         Bounds& out);

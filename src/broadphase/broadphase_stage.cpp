@@ -112,7 +112,8 @@ void BroadPhaseTimer::record(double ms) {
 BroadPhaseStage::BroadPhaseStage()
     : sap_(std::make_unique<SweepAndPrune>()),
       grid_(std::make_unique<MultiResolutionGrid>()),
-      bvh_(std::make_unique<StaticBvh>()) {}
+      bvh_(std::make_unique<StaticBvh>()),
+      sleepers_(std::make_unique<StaticBvh>()) {}
 
 BroadPhaseStage::~BroadPhaseStage() = default;
 
@@ -139,21 +140,37 @@ void BroadPhaseStage::staticFilterChanged(std::uint32_t slot, std::uint32_t cate
     staticMask_[slot] = mask;
 }
 
-const std::uint32_t* BroadPhaseStage::movingInCellOrder(const BodyStorage& storage) const {
-    const bool current = lastKind_ == BroadPhaseKind::Grid && layoutAtLastCall_ == storage.layoutChanges() &&
-                         grid_->boxesInCellOrder().size() == storage.moving.size();
-    return current ? grid_->boxesInCellOrder().data() : nullptr;
+const std::uint32_t* BroadPhaseStage::movingInCellOrder(const BodyStorage& storage) {
+    if (lastKind_ != BroadPhaseKind::Grid || layoutAtLastCall_ != storage.layoutChanges()) return nullptr;
+    const AlignedVector<std::uint32_t>& cells = grid_->boxesInCellOrder();
+    const std::uint32_t n = storage.moving.size();
+    if (!lastSearchWasAwakeOnly_) return cells.size() == n ? cells.data() : nullptr;
+    // The grid saw the awake rows of the last call: they go first, in its cell order, and the sleepers of that call
+    // after them in their present order, so that the awake rows of a world that sleeps are packed together.
+    if (cells.size() != awake_.size()) return nullptr;
+    cellOrder_.resize(n);
+    std::size_t at = 0;
+    for (const std::uint32_t k : cells) cellOrder_[at++] = awake_[k];
+    std::size_t next = 0;  // awake_ ascends: the rows missing from it are the sleepers
+    for (std::uint32_t i = 0; i < n; ++i) {
+        if (next < awake_.size() && awake_[next] == i) {
+            ++next;
+            continue;
+        }
+        cellOrder_[at++] = i;
+    }
+    return cellOrder_.data();
 }
 
 std::uint32_t BroadPhaseStage::staticPrimitiveCount() const { return bvh_->primitiveCount(); }
 
 BroadPhaseStage::StepInProgress::StepInProgress(BroadPhaseStage& stage, bool takesEveryCore)
-    : bvh_(takesEveryCore ? stage.bvh_.get() : nullptr) {
-    if (bvh_ != nullptr) bvh_->stepBegins();
+    : bvh_(takesEveryCore ? stage.bvh_.get() : nullptr), sleepers_(takesEveryCore ? stage.sleepers_.get() : nullptr) {
+    if (bvh_ != nullptr) bvh_->stepBegins(), sleepers_->stepBegins();
 }
 
 BroadPhaseStage::StepInProgress::~StepInProgress() {
-    if (bvh_ != nullptr) bvh_->stepEnds();
+    if (bvh_ != nullptr) bvh_->stepEnds(), sleepers_->stepEnds();
 }
 
 const StaticBvh& BroadPhaseStage::staticBvh(TaskPool& pool) {
@@ -161,8 +178,90 @@ const StaticBvh& BroadPhaseStage::staticBvh(TaskPool& pool) {
     return *bvh_;
 }
 
+void BroadPhaseStage::syncSleepers(const Bounds& moving, const BodyStorage& storage, SleepChanges changes,
+                                   TaskPool& pool) {
+    const auto& slots = storage.slots();
+    const MovingBodies& bodies = storage.moving;
+    if (sleeperSlot_.size() < slots.size()) sleeperSlot_.resize(slots.size(), 0);
+    changedSlots_.clear();
+    if (changes.all) {
+        for (std::uint32_t slot = 0; slot < slots.size(); ++slot) changedSlots_.push_back(slot);
+    } else {
+        changedSlots_.assign(changes.slots.begin(), changes.slots.end());
+        std::sort(changedSlots_.begin(), changedSlots_.end());
+        changedSlots_.erase(std::unique(changedSlots_.begin(), changedSlots_.end()), changedSlots_.end());
+    }
+    fellAsleep_.clear();
+    for (const std::uint32_t slot : changedSlots_) {
+        // Every change of a body's pose, shape or filter wakes it first, so a sleeper's box holds while it sleeps;
+        // one that slept again may have moved in between, so its box is taken anew.
+        if (sleeperSlot_[slot]) {
+            sleepers_->remove(slot);
+            sleeperSlot_[slot] = 0;
+            --sleeperCount_;
+        }
+        if (!storage.alive(slot) || slots[slot].set != BodySet::Moving) continue;
+        const std::uint32_t i = slots[slot].dense;
+        if ((bodies.flags[i] & kFlagAsleep) == 0) continue;
+        const Aabb box{{moving.minX[i], moving.minY[i], moving.minZ[i]},
+                       {moving.maxX[i], moving.maxY[i], moving.maxZ[i]}};
+        fellAsleep_.push_back({box, slot, kWholeBody});
+        sleeperSlot_[slot] = 1;
+        ++sleeperCount_;
+    }
+    if (!fellAsleep_.empty()) sleepers_->insert(fellAsleep_, pool);
+}
+
+void BroadPhaseStage::gatherAwake(const Bounds& moving, const MovingBodies& bodies, TaskPool& pool) {
+    constexpr std::size_t kGatherChunk = 16384;
+    const std::uint32_t n = moving.size();
+    const std::size_t chunks = TaskPool::chunkCount(n, kGatherChunk);
+    chunkAwake_.assign(chunks + 1, 0);
+    pool.forChunks(n, kGatherChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
+        std::uint32_t count = 0;
+        for (std::size_t i = begin; i < end; ++i) count += (bodies.flags[i] & kFlagAsleep) == 0;
+        chunkAwake_[c + 1] = count;
+    });
+    for (std::size_t c = 0; c < chunks; ++c) chunkAwake_[c + 1] += chunkAwake_[c];
+    const std::uint32_t awake = chunkAwake_[chunks];
+    awake_.resize(awake);
+    awakeBounds_.resize(awake);
+    awakeCategory_.resize(awake);
+    awakeMask_.resize(awake);
+    awakeSlot_.resize(awake);
+    pool.forChunks(n, kGatherChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
+        std::uint32_t at = chunkAwake_[c];
+        for (std::size_t i = begin; i < end; ++i) {
+            if (bodies.flags[i] & kFlagAsleep) continue;
+            awake_[at] = static_cast<std::uint32_t>(i);
+            awakeBounds_.minX[at] = moving.minX[i], awakeBounds_.minY[at] = moving.minY[i];
+            awakeBounds_.minZ[at] = moving.minZ[i], awakeBounds_.maxX[at] = moving.maxX[i];
+            awakeBounds_.maxY[at] = moving.maxY[i], awakeBounds_.maxZ[at] = moving.maxZ[i];
+            awakeCategory_[at] = bodies.filterCategory[i];
+            awakeMask_[at] = bodies.filterMask[i];
+            awakeSlot_[at] = bodies.slot[i];
+            ++at;
+        }
+    });
+}
+
+void BroadPhaseStage::findSleeperPairs(const Bounds& moving, const BodyStorage& storage, const PairFilter& filter,
+                                       TaskPool& pool, CandidatePairs& out) {
+    // The tree's query skips asleep moving bodies (a static counts as asleep), so only awake ones look for sleepers;
+    // the filter bits of both are read here, in dense order.
+    StaticQueryFilter sleeperFilter;
+    sleeperFilter.moving = filter;
+    sleepers_->query(moving, sleeperFilter, pool, sleeperPairs_, sleeperMeshes_, sleeperTriangles_);
+    out.droppedMoving += sleepers_->droppedHits();
+    const auto& slots = storage.slots();
+    for (const BodyPair& p : sleeperPairs_) {
+        const std::uint32_t sleeper = slots[p.b].dense;
+        if (filter.accepts(p.a, sleeper)) out.moving.push_back({std::min(p.a, sleeper), std::max(p.a, sleeper)});
+    }
+}
+
 void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage, BroadPhaseKind requested,
-                                TaskPool& pool, CandidatePairs& out) {
+                                SleepChanges sleepChanges, TaskPool& pool, CandidatePairs& out) {
     out.clear();
     const MovingBodies& bodies = storage.moving;
     PairFilter filter;
@@ -171,16 +270,30 @@ void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage
     filter.flags = bodies.flags.data();
     filter.asleepBit = kFlagAsleep;
 
+    syncSleepers(moving, storage, sleepChanges, pool);
+    // With sleepers in their tree, SAP or the grid see the awake bodies only: a pair of two sleepers is never kept,
+    // and awake against asleep comes from the tree.
+    const bool awakeOnly = sleeperCount_ > 0;
+    const Bounds* searched = &moving;
+    PairFilter searchFilter = filter;
+    const std::uint32_t* searchSlots = bodies.slot.data();
+    if (awakeOnly) {
+        gatherAwake(moving, bodies, pool);
+        searched = &awakeBounds_;
+        searchFilter = PairFilter{awakeCategory_.data(), awakeMask_.data(), nullptr, 0};
+        searchSlots = awakeSlot_.data();
+    }
+
     BroadPhaseKind kind = requested;
     if (requested == BroadPhaseKind::Auto) {
-        const std::uint32_t n = moving.size();
+        const std::uint32_t n = searched->size();
         const bool countMoved =
             n > countAtEstimate_ + countAtEstimate_ / 8 || n < countAtEstimate_ - countAtEstimate_ / 8;
         std::optional<BroadPhaseKind> estimate;
         // The estimate is also renewed every trial period, since a world's spread changes (a rain becomes a pile):
         // a renewed estimate is followed only when decisive, else the clock keeps deciding.
         if (!estimated_ || countMoved || ++stepsSinceEstimate_ >= BroadPhaseTimer::kTrialPeriod) {
-            const BroadPhaseChoice choice = chooseBroadPhase(moving, timer_.inUse(), pool);
+            const BroadPhaseChoice choice = chooseBroadPhase(*searched, timer_.inUse(), pool);
             if (!estimated_ || countMoved || choice.decisive) estimate = choice.kind;
             estimateDecisive_ = choice.decisive;
             estimated_ = true;
@@ -191,15 +304,17 @@ void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage
     }
     const auto searchBegin = std::chrono::steady_clock::now();
     if (kind == BroadPhaseKind::Grid) {
+        // The grid's kept layout follows rows; the awake rows are gathered anew each step.
         RowContinuity continuity = RowContinuity::None;
-        if (lastKind_ == BroadPhaseKind::Grid && storage.layoutChanges() == layoutAtLastCall_)
+        const bool sameRows = !awakeOnly && !lastSearchWasAwakeOnly_ && lastKind_ == BroadPhaseKind::Grid;
+        if (sameRows && storage.layoutChanges() == layoutAtLastCall_)
             continuity = RowContinuity::SameRows;
-        else if (lastKind_ == BroadPhaseKind::Grid && storage.layoutChanges() == layoutInCellOrder_)
+        else if (sameRows && storage.layoutChanges() == layoutInCellOrder_)
             continuity = RowContinuity::InCellOrder;
-        grid_->findPairs(moving, filter, pool, out.moving, continuity);
+        grid_->findPairs(*searched, searchFilter, pool, out.moving, continuity);
         out.droppedMoving = grid_->droppedPairs();
     } else {
-        sap_->findPairs(moving, bodies.slot.data(), static_cast<std::uint32_t>(storage.slots().size()), filter, pool,
+        sap_->findPairs(*searched, searchSlots, static_cast<std::uint32_t>(storage.slots().size()), searchFilter, pool,
                         out.moving);
         out.droppedMoving = sap_->droppedPairs();
     }
@@ -209,7 +324,13 @@ void BroadPhaseStage::findPairs(const Bounds& moving, const BodyStorage& storage
     // A switch loses SAP's kept order; it is rebuilt from scratch the next time SAP runs.
     if (kind != lastKind_ && lastKind_ == BroadPhaseKind::SweepAndPrune) sap_->reset();
     lastKind_ = kind;
+    lastSearchWasAwakeOnly_ = awakeOnly;
     layoutAtLastCall_ = storage.layoutChanges();
+    if (awakeOnly) {
+        // Awake rows are in dense order, so a < b still holds in dense indices.
+        for (BodyPair& p : out.moving) p = {awake_[p.a], awake_[p.b]};
+        findSleeperPairs(moving, storage, filter, pool, out);
+    }
     sortPairs(out.moving, pool);
 
     if (!bvh_->empty() && moving.size() > 0) {

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "broadphase/broadphase.h"
@@ -81,15 +82,29 @@ public:
     /// A static body's collision filter changed.
     void staticFilterChanged(std::uint32_t slot, std::uint32_t category, std::uint32_t mask);
 
-    /// Candidate pairs for this step: moving-moving pairs from SAP or the grid, moving-static pairs from the BVH.
-    void findPairs(const Bounds& moving, const BodyStorage& storage, BroadPhaseKind requested, TaskPool& pool,
-                   CandidatePairs& out);
+    /// The moving bodies that fell asleep or woke since the last findPairs (slots, any order, repeats allowed), or
+    /// `all` when the list overflowed (SleepingIslands::sleepChanges()).
+    struct SleepChanges {
+        std::span<const std::uint32_t> slots;
+        bool all = false;
+    };
+
+    /// Candidate pairs for this step: moving-moving pairs from SAP or the grid over the awake bodies, and from a
+    /// tree of the sleeping bodies' boxes for awake against asleep; moving-static pairs from the static BVH.
+    /// `sleepChanges` keeps the tree of sleepers current. A world that sleeps costs the search only its awake bodies:
+    /// sleepers are in the tree, built as they fall asleep (a static BVH of their own: the same incremental forest),
+    /// and a pair of two sleepers is never a candidate anyway.
+    void findPairs(const Bounds& moving, const BodyStorage& storage, BroadPhaseKind requested,
+                   SleepChanges sleepChanges, TaskPool& pool, CandidatePairs& out);
+    /// Sleeping bodies in the broad phase's tree of sleepers.
+    std::uint32_t sleeperCount() const { return sleeperCount_; }
 
     /// The algorithm the last call used for moving-moving pairs.
     BroadPhaseKind lastKind() const { return lastKind_; }
     /// The moving bodies in the grid's cell order, when the last call ran the grid and no body was added or removed
-    /// since (else null): an order of the storage that keeps bodies near in space near in memory.
-    const std::uint32_t* movingInCellOrder(const BodyStorage& storage) const;
+    /// since (else null): an order of the storage that keeps bodies near in space near in memory. When the grid saw
+    /// only the awake bodies, they come first in its order and the sleepers after them.
+    const std::uint32_t* movingInCellOrder(const BodyStorage& storage);
     /// The storage was just put in movingInCellOrder()'s order: the grid's next search may re-sort only the bodies
     /// that change cell.
     void movingPutInCellOrder(const BodyStorage& storage) { layoutInCellOrder_ = storage.layoutChanges(); }
@@ -110,10 +125,19 @@ public:
         StepInProgress& operator=(const StepInProgress&) = delete;
 
     private:
-        StaticBvh* bvh_;  ///< null when the merges may run
+        StaticBvh* bvh_;       ///< null when the merges may run
+        StaticBvh* sleepers_;  ///< likewise
     };
 
 private:
+    /// Puts the bodies that fell asleep into the tree of sleepers and takes out those that woke or are gone.
+    void syncSleepers(const Bounds& moving, const BodyStorage& storage, SleepChanges changes, TaskPool& pool);
+    /// The awake bodies' rows (boxes, filters, slots) in dense order, for a search without the sleepers.
+    void gatherAwake(const Bounds& moving, const MovingBodies& bodies, TaskPool& pool);
+    /// Appends the pairs of awake bodies with sleepers (dense indices, a < b) to `out`.
+    void findSleeperPairs(const Bounds& moving, const BodyStorage& storage, const PairFilter& filter, TaskPool& pool,
+                          CandidatePairs& out);
+
     std::unique_ptr<SweepAndPrune> sap_;
     std::unique_ptr<MultiResolutionGrid> grid_;
     std::unique_ptr<StaticBvh> bvh_;
@@ -127,6 +151,21 @@ private:
     std::uint32_t stepsSinceEstimate_ = 0;
     std::vector<std::uint32_t> staticCategory_, staticMask_;  ///< by static slot
     std::vector<StaticPrimitive> addedPrimitives_;            ///< scratch of staticAdded
+    // The sleepers: their tree (body id = slot), which slots it holds, and the awake rows the search runs over.
+    std::unique_ptr<StaticBvh> sleepers_;
+    std::vector<std::uint8_t> sleeperSlot_;
+    std::uint32_t sleeperCount_ = 0;
+    bool lastSearchWasAwakeOnly_ = false;
+    std::vector<std::uint32_t> changedSlots_;
+    std::vector<StaticPrimitive> fellAsleep_;
+    std::vector<std::uint32_t> chunkAwake_;
+    std::vector<std::uint32_t> awake_;      ///< dense index of each awake row
+    std::vector<std::uint32_t> cellOrder_;  ///< movingInCellOrder() of a search over the awake rows
+    Bounds awakeBounds_;
+    std::vector<std::uint32_t> awakeCategory_, awakeMask_, awakeSlot_;
+    std::vector<BodyPair> sleeperPairs_;
+    std::vector<MeshPair> sleeperMeshes_;  ///< always empty: a sleeper is one box
+    std::vector<std::uint32_t> sleeperTriangles_;
 };
 
 }  // namespace rubble::detail

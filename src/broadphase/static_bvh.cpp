@@ -984,6 +984,7 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
         for (auto i = std::uint32_t(begin); i < end; ++i) {
             const std::size_t local = i - begin;
             const bool asleep = mf.asleep(i);  // asleep vs static (which counts as asleep) is never a pair
+            if (asleep && !rewrite) continue;  // a world that sleeps costs a flag a sleeper
             const Aabb box = boxOf(i);
             const KeptHit* list = out.kept.data() + out.keptStart[local];
             std::size_t listSize = out.keptStart[local + 1] - out.keptStart[local];

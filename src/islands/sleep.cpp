@@ -37,14 +37,41 @@ void pickIslands(std::uint32_t islands, TaskPool& pool, std::vector<std::vector<
 
 }  // namespace
 
-void SleepingIslands::linkSleepingIslands(const BodyStorage& storage, std::vector<IslandEdge>& edges) const {
+void SleepingIslands::linkSleepingIslands(const BodyStorage& storage, const Contacts& contacts, TaskPool& pool,
+                                          std::vector<IslandEdge>& edges) {
     if (sleepingBodies_ == 0) return;
+    const MovingBodies& m = storage.moving;
     const auto& slots = storage.slots();
-    for (std::uint32_t index = 0; index < groups_.size(); ++index) {
-        if (!groupIds_.alive(index)) continue;
-        const Group& g = groups_[index];
-        const std::uint32_t first = slots[g.slots[0]].dense;
-        for (std::size_t k = 1; k < g.slots.size(); ++k) edges.emplace_back(first, slots[g.slots[k]].dense);
+    groupLinkedAt_.resize(groups_.size(), 0);
+    const std::uint64_t call = ++linkCalls_;
+    const auto asleep = [&](std::uint32_t dense) { return (m.flags[dense] & kFlagAsleep) != 0; };
+    const std::size_t jointEdges = edges.size();
+    const auto link = [&](std::uint32_t dense) {
+        const std::uint32_t g = m.sleepGroup[dense];
+        if (groupLinkedAt_[g] == call) return;
+        groupLinkedAt_[g] = call;
+        const Group& group = groups_[g];
+        const std::uint32_t first = slots[group.slots[0]].dense;
+        for (std::size_t k = 1; k < group.slots.size(); ++k) edges.emplace_back(first, slots[group.slots[k]].dense);
+    };
+    // The broad phase finds no pair of two sleeping bodies, nor of a sleeping and a static one: a manifold with a
+    // sleeping side has an awake (or kinematic) body on the other.
+    chunkTouching_.resize(TaskPool::chunkCount(contacts.pairs.size(), kManifoldChunk));
+    pool.forChunks(contacts.pairs.size(), kManifoldChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
+        std::vector<std::uint32_t>& touching = chunkTouching_[c];
+        touching.clear();
+        for (std::size_t k = begin; k < end; ++k) {
+            const ContactPair& p = contacts.pairs[k];
+            if (!p.aStatic && asleep(p.a)) touching.push_back(p.a);
+            if (!p.bStatic && asleep(p.b)) touching.push_back(p.b);
+        }
+    });
+    for (const std::vector<std::uint32_t>& touching : chunkTouching_)
+        for (const std::uint32_t dense : touching) link(dense);
+    // Joints: two bodies of one sleeping island sleep together; a joint to an awake body wakes the island.
+    for (std::size_t k = 0; k < jointEdges; ++k) {
+        const auto [a, b] = edges[k];
+        if (asleep(a) != asleep(b)) link(asleep(a) ? a : b);
     }
 }
 
@@ -112,9 +139,10 @@ void SleepingIslands::fallAsleep(const Islands& islands, const Contacts& contact
         std::vector<std::uint32_t>& lone = chunkLone_[c];
         lone.clear();
         for (std::size_t i = begin; i < end; ++i) {
+            if (m.flags[i] & kFlagAsleep) continue;
             const std::uint32_t island = islands.islandOf[i];
             const bool alone = island == kNoIsland;
-            if ((alone && !joinsIslands(m.flags[i])) || (m.flags[i] & kFlagAsleep)) continue;
+            if (alone && !joinsIslands(m.flags[i])) continue;
             const float v = m.vx[i] * m.vx[i] + m.vy[i] * m.vy[i] + m.vz[i] * m.vz[i];
             const float w = m.wx[i] * m.wx[i] + m.wy[i] * m.wy[i] + m.wz[i] * m.wz[i];
             const float reach = shapes.reach[m.shape[i]];
@@ -144,6 +172,7 @@ void SleepingIslands::fallAsleep(const Islands& islands, const Contacts& contact
         m.vx[i] = m.vy[i] = m.vz[i] = m.wx[i] = m.wy[i] = m.wz[i] = 0;
         m.sleepGroup[i] = g;
         groups_[g].slots.push_back(m.slot[i]);
+        noteChange(m.slot[i]);
         sleepingBodies_ += 1;
     };
     const auto sleepIsland = [&](std::uint32_t k) {
@@ -187,12 +216,25 @@ void SleepingIslands::wakeGroup(std::uint32_t g, BodyStorage& storage, std::vect
         const std::uint32_t i = slots[slot].dense;
         m.flags[i] &= static_cast<std::uint8_t>(~kFlagAsleep);
         m.sleepTimer[i] = 0;
+        noteChange(slot);
     }
     sleepingBodies_ -= static_cast<std::uint32_t>(group.slots.size());
     out.insert(out.end(), group.manifolds.begin(), group.manifolds.end());
     group.slots.clear();
     group.manifolds.clear();
     groupIds_.release(g);
+}
+
+void SleepingIslands::noteChange(std::uint32_t slot) {
+    if (changesOverflowed_) return;
+    // A world whose broad phase does not run (a lone body) drains nothing: past this the list says "look at all".
+    constexpr std::size_t kMostListed = std::size_t{1} << 20;
+    if (changedSlots_.size() >= kMostListed) {
+        changedSlots_.clear();
+        changesOverflowed_ = true;
+        return;
+    }
+    changedSlots_.push_back(slot);
 }
 
 void SleepingIslands::wake(std::uint32_t dense, BodyStorage& storage) {

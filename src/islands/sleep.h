@@ -7,8 +7,9 @@
 // asleep its bodies are not integrated, the broad phase skips pairs of two sleeping bodies (or a sleeping and a
 // static one), so the narrow phase, the contact cache and the solver never see its contacts.
 //
-// Waking is per island too. In the step, the union-find joins every body of a sleeping island (its members are
-// linked by extra edges), so an awake body that touches one of them lands in the same island; an island that holds
+// Waking is per island too. In the step, the union-find joins every body of a sleeping island that a manifold or a
+// joint of the step touches (its members are linked by extra edges), so an awake body that touches one of them
+// lands in the same island, and the islands no one touches cost nothing; an island that holds
 // an awake body, or touches a moving kinematic body, wakes whole, and its kept manifolds come back into the step's
 // contacts with their impulses, so that a woken stack is solved as it was left. Between steps the API wakes a body's
 // island (forces, impulses, velocities, transforms, removal of a body it rests on); its kept manifolds then go to
@@ -31,8 +32,12 @@ class TaskPool;
 
 class SleepingIslands {
 public:
-    /// Appends the edges that hold each sleeping island together (dense indices) to `edges`.
-    void linkSleepingIslands(const BodyStorage& storage, std::vector<IslandEdge>& edges) const;
+    /// Appends to `edges` the edges that hold together each sleeping island this step may wake (dense indices):
+    /// those with a body that is a side of one of this step's manifolds or of an extra edge already in `edges` whose
+    /// other side is awake. The others stay out of the union-find, so a world that sleeps costs the islands stage
+    /// nothing for its sleepers (a sleeping island wakes only through a body that touches it).
+    void linkSleepingIslands(const BodyStorage& storage, const Contacts& contacts, TaskPool& pool,
+                             std::vector<IslandEdge>& edges);
     /// In the step, after the islands are built: an island that holds a sleeping body wakes whole when it also holds
     /// an awake body or touches a moving kinematic body. The kept manifolds of woken islands are appended to this
     /// step's contacts and impulses. Returns whether any were, in which case the islands' manifold rows are stale.
@@ -54,6 +59,18 @@ public:
     void flushWarmStarts(ContactCache& cache);
 
     std::uint32_t sleepingBodies() const { return sleepingBodies_; }
+    /// The bodies (slots) that fell asleep or woke since the last clearSleepChanges(), in no order and possibly
+    /// repeated, for the broad phase's tree of sleepers; `all` when there were too many to list (then look at every
+    /// body).
+    struct Changes {
+        std::span<const std::uint32_t> slots;
+        bool all = false;
+    };
+    Changes sleepChanges() const { return {changedSlots_, changesOverflowed_}; }
+    void clearSleepChanges() {
+        changedSlots_.clear();
+        changesOverflowed_ = false;
+    }
     /// The kept manifolds of moving body `dense`'s sleeping island (bodies named by slot); empty when it is awake.
     std::span<const KeptManifold> keptManifolds(std::uint32_t dense, const BodyStorage& storage) const {
         if (!(storage.moving.flags[dense] & kFlagAsleep)) return {};
@@ -77,13 +94,16 @@ private:
     void wakeGroup(std::uint32_t g, BodyStorage& storage, std::vector<KeptManifold>& out);
     /// Fills sleepingPartners_ from the kept manifolds and last step's contacts.
     void indexSleepingPartners(const BodyStorage& storage, const ContactCache& cache);
+    /// Lists a body that fell asleep or woke (its slot), up to a bound that keeps an undrained list from growing.
+    void noteChange(std::uint32_t slot);
 
     SlotMap<GroupId> groupIds_;
     std::vector<Group> groups_;  ///< by group slot
     std::vector<KeptManifold> pendingWarmStarts_;
     std::vector<std::uint8_t> touchedByKinematic_;  ///< per island of the step: touches a moving kinematic body
     std::vector<std::vector<std::uint32_t>> chunkIslands_;
-    std::vector<std::vector<std::uint32_t>> chunkLone_;  ///< per chunk of bodies: those that fall asleep alone
+    std::vector<std::vector<std::uint32_t>> chunkLone_;      ///< per chunk of bodies: those that fall asleep alone
+    std::vector<std::vector<std::uint32_t>> chunkTouching_;  ///< per chunk of manifolds: their sleeping sides
     std::vector<KeptManifold> restored_;
     /// Between steps, (slot, slot of a sleeping body it touches) sorted by the first: a game that removes a thousand
     /// bodies a step looks each one's sleeping partners up here instead of scanning every contact a thousand times.
@@ -92,6 +112,11 @@ private:
     std::vector<std::pair<std::uint32_t, std::uint32_t>> sleepingPartners_;
     bool sleepingPartnersIndexed_ = false;
     std::uint32_t sleepingBodies_ = 0;
+    std::vector<std::uint32_t> changedSlots_;
+    bool changesOverflowed_ = false;
+    /// linkSleepingIslands: per group, the last call that linked it (so each is linked once), and that call's number.
+    std::vector<std::uint64_t> groupLinkedAt_;
+    std::uint64_t linkCalls_ = 0;
 };
 
 }  // namespace rubble::detail

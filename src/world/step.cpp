@@ -106,7 +106,7 @@ void buildIslands(World::Impl& w, StepContext& step) {
             }
             w.jointCoupling.appendEdges(w.islandEdges);
         }
-        w.sleeping.linkSleepingIslands(w.bodies, w.islandEdges);
+        w.sleeping.linkSleepingIslands(w.bodies, w.contacts, step.pool, w.islandEdges);
         w.islandBuilder.build(w.contacts, w.islandEdges, w.bodies.moving, step.pool, w.islands);
         if (step.sleeping && w.sleeping.wakeTouched(w.islands, w.bodies, w.integrationScratch, w.contacts, w.impulses,
                                                     w.contactCache, step.pool))
@@ -134,12 +134,22 @@ void findContacts(World::Impl& w, StepContext& step) {
     step.collided = true;
     {
         const auto timer = step.time(Stage::UpdateBounds);
-        detail::updateBounds(w.bodies.moving, w.shapeBounds, detail::BoundsParams{step.dt, w.settings.contactMargin},
-                             step.pool, w.movingBounds);
+        const detail::BoundsParams params{step.dt, w.settings.contactMargin};
+        // The sleepers' boxes hold while the rows, the parameters and who sleeps stay as they were at the last call.
+        const detail::SleepingIslands::Changes changes = w.sleeping.sleepChanges();
+        const bool keepSleepers = w.sleeping.sleepingBodies() > 0 && changes.slots.empty() && !changes.all &&
+                                  w.boundsLayout == w.bodies.layoutChanges() && w.boundsParams.dt == params.dt &&
+                                  w.boundsParams.margin == params.margin;
+        detail::updateBounds(w.bodies.moving, w.shapeBounds, params, step.pool, w.movingBounds, keepSleepers);
+        w.boundsLayout = w.bodies.layoutChanges();
+        w.boundsParams = params;
     }
     {
         const auto timer = step.time(Stage::BroadPhase);
-        w.broadPhase.findPairs(w.movingBounds, w.bodies, w.settings.broadPhase, step.pool, w.pairs);
+        const detail::SleepingIslands::Changes changes = w.sleeping.sleepChanges();
+        w.broadPhase.findPairs(w.movingBounds, w.bodies, w.settings.broadPhase, {changes.slots, changes.all}, step.pool,
+                               w.pairs);
+        w.sleeping.clearSleepChanges();
     }
     profile.broadPhase = w.broadPhase.lastKind();
     profile.movingPairs = static_cast<std::uint32_t>(w.pairs.moving.size());

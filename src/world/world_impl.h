@@ -62,6 +62,8 @@ struct World::Impl {
     detail::IntegrationScratch integrationScratch;
     detail::ShapeBoundsTable shapeBounds;
     detail::Bounds movingBounds;
+    std::uint64_t boundsLayout = ~std::uint64_t{0};  ///< BodyStorage::layoutChanges() at the last updateBounds
+    detail::BoundsParams boundsParams;               ///< ... and its parameters
     detail::BroadPhaseStage broadPhase;
     detail::CandidatePairs pairs;
     detail::NarrowPhaseStage narrowPhase;

@@ -128,7 +128,7 @@ void checkStep(TestWorld& w, BroadPhaseStage& stage, BroadPhaseKind kind, TaskPo
     Bounds bounds;
     updateBounds(w.storage.moving, w.table, BoundsParams{1.0f / 60, 0.02f}, pool, bounds);
     CandidatePairs pairs;
-    stage.findPairs(bounds, w.storage, kind, pool, pairs);
+    stage.findPairs(bounds, w.storage, kind, {}, pool, pairs);
 
     PairFilter filter;
     filter.category = w.storage.moving.filterCategory.data();
@@ -274,13 +274,13 @@ TEST(BroadPhaseStage, AutoFollowsAWorldThatPilesUpAfterADecisiveEstimate) {
     };
     place(2.0f);
     ASSERT_TRUE(chooseBroadPhase(bounds, BroadPhaseKind::Auto, pool).decisive);
-    for (int step = 0; step < 10; ++step) stage.findPairs(bounds, w.storage, BroadPhaseKind::Auto, pool, pairs);
+    for (int step = 0; step < 10; ++step) stage.findPairs(bounds, w.storage, BroadPhaseKind::Auto, {}, pool, pairs);
     EXPECT_EQ(stage.lastKind(), BroadPhaseKind::SweepAndPrune);
     place(0.0f);
     const BroadPhaseChoice pile = chooseBroadPhase(bounds, BroadPhaseKind::SweepAndPrune, pool);
     ASSERT_TRUE(pile.decisive && pile.kind == BroadPhaseKind::Grid) << pile.sweepCandidatesPerBody;
     for (std::uint32_t step = 0; step <= BroadPhaseTimer::kTrialPeriod; ++step)
-        stage.findPairs(bounds, w.storage, BroadPhaseKind::Auto, pool, pairs);
+        stage.findPairs(bounds, w.storage, BroadPhaseKind::Auto, {}, pool, pairs);
     EXPECT_EQ(stage.lastKind(), BroadPhaseKind::Grid);
 }
 

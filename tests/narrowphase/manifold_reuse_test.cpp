@@ -196,7 +196,7 @@ struct Pile {
         Bounds bounds;
         CandidatePairs candidates;
         updateBounds(scene.storage.moving, scene.table, BoundsParams{1.0f / 60, kMargin}, pool, bounds);
-        broad.findPairs(bounds, scene.storage, BroadPhaseKind::Auto, pool, candidates);
+        broad.findPairs(bounds, scene.storage, BroadPhaseKind::Auto, {}, pool, candidates);
         Contacts contacts;
         stage.run(candidates, scene.storage, scene.shapes, NarrowPhaseParams{kMargin, 1.0f / 60, reuseDistance}, pool,
                   contacts);

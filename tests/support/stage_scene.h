@@ -77,7 +77,7 @@ inline Contacts runStages(StageScene& scene, BroadPhaseStage& broad, int threads
     TaskPool pool(threads);
     Bounds bounds;
     updateBounds(scene.storage.moving, scene.table, BoundsParams{1.0f / 60, margin}, pool, bounds);
-    broad.findPairs(bounds, scene.storage, BroadPhaseKind::Auto, pool, candidates);
+    broad.findPairs(bounds, scene.storage, BroadPhaseKind::Auto, {}, pool, candidates);
     NarrowPhaseStage narrow;
     Contacts contacts;
     narrow.run(candidates, scene.storage, scene.shapes, NarrowPhaseParams{margin, 1.0f / 60}, pool, contacts);
