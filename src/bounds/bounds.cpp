@@ -87,6 +87,11 @@ void updateBounds(const MovingBodies& bodies, const ShapeBoundsTable& shapes, co
     });
 }
 
+void updateBoundsOf(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,
+                    std::span<const std::uint32_t> rows, Bounds& out) {
+    for (const std::uint32_t i : rows) boundsKernel<float>(bodies, shapes, params, out, i);
+}
+
 void updateBoundsScalar(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,
                         Bounds& out) {
     out.resize(bodies.size());

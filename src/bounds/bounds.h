@@ -2,6 +2,7 @@
 // Update-bounds stage: the world AABB of every moving body, enlarged by its motion over the coming step (linear and
 // rotational) and a contact margin, so that the broad phase finds pairs before they touch (speculative contacts).
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "broadphase/broadphase.h"
@@ -28,12 +29,15 @@ struct BoundsParams {
 };
 
 /// Writes the world boxes of all moving bodies into `out` (resized to the body count). With `keepSleepers`, the
-/// caller vouches that `out` holds the boxes of these same rows from a call with the same params and that no body
-/// fell asleep or woke since: a batch of lanes that holds only sleepers is left as it is (a sleeper's pose and zero
-/// velocity do not change while it sleeps, so its box is the one computed before, to the bit), so that a world that
-/// sleeps pays for its awake bodies.
+/// caller vouches that `out` holds the boxes of the same rows (rows may have been appended since) from a call with
+/// the same params, and recomputes with updateBoundsOf the rows that fell asleep since: a batch of lanes that holds
+/// only sleepers is left as it is (a sleeper's pose and zero velocity do not change while it sleeps, so its box is
+/// the one computed before, to the bit), so that a world that sleeps pays for its awake bodies.
 void updateBounds(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,
                   TaskPool& pool, Bounds& out, bool keepSleepers = false);
+/// The boxes of the given rows only (the same values as updateBounds writes), into `out` of the body count.
+void updateBoundsOf(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,
+                    std::span<const std::uint32_t> rows, Bounds& out);
 /// The same, one body at a time, as the reference for the SIMD path.
 void updateBoundsScalar(const MovingBodies& bodies, const ShapeBoundsTable& shapes, const BoundsParams& params,
                         Bounds& out);

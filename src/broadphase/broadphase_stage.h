@@ -134,9 +134,10 @@ private:
     void syncSleepers(const Bounds& moving, const BodyStorage& storage, SleepChanges changes, TaskPool& pool);
     /// The awake bodies' rows (boxes, filters, slots) in dense order, for a search without the sleepers.
     void gatherAwake(const Bounds& moving, const MovingBodies& bodies, TaskPool& pool);
-    /// Appends the pairs of awake bodies with sleepers (dense indices, a < b) to `out`.
-    void findSleeperPairs(const Bounds& moving, const BodyStorage& storage, const PairFilter& filter, TaskPool& pool,
-                          CandidatePairs& out);
+    /// Appends the pairs of awake bodies with sleepers (dense indices, a < b) to `out`. `filter` is over the dense
+    /// rows, `awakeFilter` over the awake rows.
+    void findSleeperPairs(const BodyStorage& storage, const PairFilter& filter, const PairFilter& awakeFilter,
+                          TaskPool& pool, CandidatePairs& out);
 
     std::unique_ptr<SweepAndPrune> sap_;
     std::unique_ptr<MultiResolutionGrid> grid_;

@@ -715,12 +715,12 @@ void StaticBvh::notePending(std::span<const StaticPrimitive> primitives) {
     }
 }
 
-void StaticBvh::insert(std::span<const StaticPrimitive> primitives, TaskPool& pool) {
+void StaticBvh::insert(std::span<const StaticPrimitive> primitives, TaskPool& pool, BuildQuality quality) {
     if (primitives.empty()) return;
     for (const StaticPrimitive& p : primitives) noteEdit(p.box);
     pending_.insert(pending_.end(), primitives.begin(), primitives.end());
     notePending(primitives);
-    if (pending_.size() >= kBatchPrimitives) commitBuilding(pool, BuildQuality::Sah);  // the caller's time
+    if (pending_.size() >= kBatchPrimitives) commitBuilding(pool, quality);  // the caller's time
 }
 
 void StaticBvh::remove(std::uint32_t body) {
@@ -932,6 +932,7 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
 
     const std::size_t chunkCount = TaskPool::chunkCount(n, kQueryChunk);
     if (chunks_.size() < chunkCount) chunks_.resize(chunkCount);
+    chunkHasOutput_.assign(chunkCount, 0);
     if (workers_.size() < std::size_t(pool.threadCount())) workers_.resize(std::size_t(pool.threadCount()));
     std::uint32_t depth = 0;
     for (const Tree* tree : treeViews_) depth = std::max(depth, tree->depth);
@@ -943,6 +944,15 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
         out.bodyPairs.clear();
         out.meshPairs.clear();
         out.triangles.clear();
+        // A chunk of sleepers has no pairs (a sleeper against a static is never one) and keeps no hits, so that a
+        // world that sleeps costs a flag a body here: when one of them wakes, the chunk looks again.
+        bool anyAwake = false;
+        for (auto i = std::uint32_t(begin); i < end && !anyAwake; ++i) anyAwake = !filter.moving.asleep(i);
+        if (!anyAwake) {
+            out.keptBegin = out.keptEnd = 0;
+            out.keptDropped = 0;
+            return;
+        }
         const bool keptValid = out.keptGeneration == generation_ && out.keptBegin == begin && out.keptEnd == end;
         out.grown.resize(end - begin);
         out.keptStart.resize(end - begin + 1);
@@ -1073,11 +1083,14 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
         out.keptGeneration = generation_;
         out.keptBegin = std::uint32_t(begin);
         out.keptEnd = std::uint32_t(end);
+        chunkHasOutput_[chunk] = !out.bodyPairs.empty() || !out.meshPairs.empty() || out.keptDropped > 0;
     });
 
-    // Merge in chunk order: the output is the same for any thread count.
+    // Merge in chunk order: the output is the same for any thread count. Most chunks of a large world have none (it
+    // rests, or sleeps): their outputs are not even looked at.
     std::size_t bodyTotal = 0, meshTotal = 0, triangleTotal = 0;
     for (std::size_t c = 0; c < chunkCount; ++c) {
+        if (!chunkHasOutput_[c]) continue;
         droppedHits_ += chunks_[c].keptDropped;
         bodyTotal += chunks_[c].bodyPairs.size();
         meshTotal += chunks_[c].meshPairs.size();
@@ -1087,6 +1100,7 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
     meshPairs.reserve(meshTotal);
     meshTriangles.reserve(triangleTotal);
     for (std::size_t c = 0; c < chunkCount; ++c) {
+        if (!chunkHasOutput_[c]) continue;
         const ChunkOutput& out = chunks_[c];
         const auto base = std::uint32_t(meshTriangles.size());
         bodyPairs.insert(bodyPairs.end(), out.bodyPairs.begin(), out.bodyPairs.end());

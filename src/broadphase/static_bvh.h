@@ -152,8 +152,9 @@ public:
     /// Replaces the whole content with `primitives`, as one part built now (merges in flight are dropped).
     void build(std::vector<StaticPrimitive> primitives, TaskPool& pool);
     /// Adds primitives (all triangles of a new static mesh, or one box). Queries see them after the next commit();
-    /// each full batch is built into a part at once, on `pool` when it is large.
-    void insert(std::span<const StaticPrimitive> primitives, TaskPool& pool);
+    /// each full batch is built into a part at once, on `pool` when it is large, by `quality` (Quick for a caller
+    /// that inserts inside a step: the merges rebuild it with the SAH later).
+    void insert(std::span<const StaticPrimitive> primitives, TaskPool& pool, BuildQuality quality = BuildQuality::Sah);
     /// Removes every primitive of `body` (no effect if it has none); takes effect at once.
     void remove(std::uint32_t body);
     /// Builds the waiting primitives into a part, swaps in the merges that finished and starts the merges due.
@@ -262,6 +263,7 @@ private:
     std::vector<Aabb> removedBoxes_;
     std::uint32_t commitsSinceFlush_ = 0;
     std::vector<ChunkOutput> chunks_;
+    std::vector<std::uint8_t> chunkHasOutput_;  ///< per chunk of the last query: it left pairs or drops to merge
     std::vector<WorkerScratch> workers_;
     std::uint64_t droppedHits_ = 0;
 };

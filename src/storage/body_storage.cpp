@@ -123,6 +123,7 @@ BodyId BodyStorage::allocate(BodySet set, std::uint32_t& denseOut) {
 void BodyStorage::release(BodyId id) {
     ++layoutChanges_;
     BodySlot& slot = slots_[id.index];
+    if (slot.set == BodySet::Moving) ++movingRowMoves_;
     const std::uint32_t moved =
         slot.set == BodySet::Moving ? moving.swapRemove(slot.dense) : statics.swapRemove(slot.dense);
     if (moved != ~0u) slots_[moved].dense = slot.dense;
@@ -158,6 +159,7 @@ void BodyStorage::reorderMoving(const std::uint32_t* order, TaskPool& pool) {
     });
     for (std::uint32_t k = 0; k < n; ++k) slots_[moving.slot[k]].dense = k;
     ++layoutChanges_;
+    ++movingRowMoves_;
 }
 
 const BodySlot* BodyStorage::find(BodyId id) const { return ids_.contains(id) ? &slots_[id.index] : nullptr; }

@@ -104,6 +104,10 @@ public:
     BodyId idAt(std::uint32_t slot) const { return ids_.idAt(slot); }
     /// Counts additions, removals and reorders: while it stays the same, every dense index names the same body.
     std::uint64_t layoutChanges() const { return layoutChanges_; }
+    /// Counts the events that can give an existing moving row another body (removals, which move the last row into
+    /// the hole, and reorders); additions only append rows. While it stays the same, rows below the old count keep
+    /// their bodies.
+    std::uint64_t movingRowMoves() const { return movingRowMoves_; }
     /// Puts the moving bodies in a new order: row k becomes the body that is at row order[k] now (`order` is a
     /// permutation of 0 .. moving.size() - 1). Every handle keeps its body; dense indices change, which
     /// layoutChanges() counts. Used to keep bodies that are near in space near in memory (World::step).
@@ -125,6 +129,7 @@ private:
     ReorderScratch reorderScratch_;
     std::vector<BodySlot> slots_;
     std::uint64_t layoutChanges_ = 0;
+    std::uint64_t movingRowMoves_ = 0;
 };
 
 }  // namespace rubble::detail

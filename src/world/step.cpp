@@ -135,13 +135,23 @@ void findContacts(World::Impl& w, StepContext& step) {
     {
         const auto timer = step.time(Stage::UpdateBounds);
         const detail::BoundsParams params{step.dt, w.settings.contactMargin};
-        // The sleepers' boxes hold while the rows, the parameters and who sleeps stay as they were at the last call.
+        // The sleepers' boxes hold while their rows and the parameters stay as they were at the last call; those
+        // that fell asleep since are computed anew (velocity zero), those that woke are computed with the awake.
         const detail::SleepingIslands::Changes changes = w.sleeping.sleepChanges();
-        const bool keepSleepers = w.sleeping.sleepingBodies() > 0 && changes.slots.empty() && !changes.all &&
-                                  w.boundsLayout == w.bodies.layoutChanges() && w.boundsParams.dt == params.dt &&
+        const bool keepSleepers = w.sleeping.sleepingBodies() > 0 && !changes.all &&
+                                  w.boundsRowMoves == w.bodies.movingRowMoves() && w.boundsParams.dt == params.dt &&
                                   w.boundsParams.margin == params.margin;
         detail::updateBounds(w.bodies.moving, w.shapeBounds, params, step.pool, w.movingBounds, keepSleepers);
-        w.boundsLayout = w.bodies.layoutChanges();
+        if (keepSleepers) {
+            w.fellAsleepRows.clear();
+            const auto& slots = w.bodies.slots();
+            for (const std::uint32_t slot : changes.slots)
+                if (w.bodies.alive(slot) && slots[slot].set == detail::BodySet::Moving &&
+                    (w.bodies.moving.flags[slots[slot].dense] & detail::kFlagAsleep))
+                    w.fellAsleepRows.push_back(slots[slot].dense);
+            detail::updateBoundsOf(w.bodies.moving, w.shapeBounds, params, w.fellAsleepRows, w.movingBounds);
+        }
+        w.boundsRowMoves = w.bodies.movingRowMoves();
         w.boundsParams = params;
     }
     {

@@ -62,8 +62,9 @@ struct World::Impl {
     detail::IntegrationScratch integrationScratch;
     detail::ShapeBoundsTable shapeBounds;
     detail::Bounds movingBounds;
-    std::uint64_t boundsLayout = ~std::uint64_t{0};  ///< BodyStorage::layoutChanges() at the last updateBounds
-    detail::BoundsParams boundsParams;               ///< ... and its parameters
+    std::uint64_t boundsRowMoves = ~std::uint64_t{0};  ///< BodyStorage::movingRowMoves() at the last updateBounds
+    detail::BoundsParams boundsParams;                 ///< ... and its parameters
+    std::vector<std::uint32_t> fellAsleepRows;         ///< scratch: rows whose kept box is stale
     detail::BroadPhaseStage broadPhase;
     detail::CandidatePairs pairs;
     detail::NarrowPhaseStage narrowPhase;

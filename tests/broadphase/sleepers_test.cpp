@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bounds/bounds.h"
+#include "broadphase/static_bvh.h"
 #include "rubble/world.h"
 #include "support/broadphase_scenarios.h"
 #include "world/world_access.h"
@@ -101,6 +102,23 @@ std::size_t checkedStep(World& world, const std::string& what) {
     filter.flags = flags.data();
     filter.asleepBit = detail::kFlagAsleep;
     EXPECT_EQ(w.pairs.moving, test::bruteForcePairs(w.movingBounds, filter)) << what;
+    // Against the statics (the ground), the awake rows alone: a sleeper against a static is never a pair.
+    std::vector<detail::StaticPrimitive> primitives;
+    const detail::StaticBodies& statics = w.bodies.statics;
+    for (std::uint32_t j = 0; j < statics.size(); ++j) {
+        const Transform pose{{statics.px[j], statics.py[j], statics.pz[j]},
+                             {statics.qx[j], statics.qy[j], statics.qz[j], statics.qw[j]}};
+        detail::appendStaticPrimitives(w.shapes[statics.shape[j]], pose, j, primitives);
+    }
+    std::vector<detail::BodyPair> staticPairs;
+    const detail::Bounds& boxes = w.movingBounds;
+    for (std::uint32_t i = 0; i < boxes.size(); ++i)
+        for (const detail::StaticPrimitive& q : primitives)
+            if (!(flags[i] & detail::kFlagAsleep) && boxes.minX[i] <= q.box.max.x && q.box.min.x <= boxes.maxX[i] &&
+                boxes.minY[i] <= q.box.max.y && q.box.min.y <= boxes.maxY[i] && boxes.minZ[i] <= q.box.max.z &&
+                q.box.min.z <= boxes.maxZ[i])
+                staticPairs.push_back({i, q.body});
+    EXPECT_EQ(w.pairs.statics, staticPairs) << what;
     std::size_t withSleeper = 0;
     for (const detail::BodyPair& p : w.pairs.moving)
         withSleeper += ((flags[p.a] | flags[p.b]) & detail::kFlagAsleep) != 0;
