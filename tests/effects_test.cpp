@@ -1,7 +1,12 @@
 // Effects: the engine drops declared effects that the world's content cannot show.
 #include <gtest/gtest.h>
 
+#include <random>
+#include <vector>
+
 #include "rubble/world.h"
+#include "world/effects.h"
+#include "world/world_access.h"
 
 using namespace rubble;
 
@@ -94,4 +99,42 @@ TEST(Effects, NamesRoundTrip) {
     EXPECT_FALSE(effectFromName("telekinesis").has_value());
     EXPECT_EQ(integratorFromName("rk4"), Integrator::RungeKutta4);
     EXPECT_EQ(broadPhaseFromName("sap"), BroadPhaseKind::SweepAndPrune);
+}
+
+TEST(Effects, MovingBodiesMaterialsCountAsTheyComeChangeAndGo) {
+    // The counts that decide the effects are kept body by body (a world of a million does not scan them all when one
+    // comes or goes): after every creation, removal and change of material they must equal a count from scratch.
+    World world;
+    const ShapeId ball = world.createShape(SphereDef{0.5f});
+    const ShapeId box = world.createShape(BoxDef{});
+    std::mt19937 rng(11);
+    std::uniform_int_distribution<int> pick(0, 7);
+    std::vector<BodyId> bodies;
+    const auto check = [&](int op) {
+        const auto& w = detail::WorldAccess::of(static_cast<const World&>(world));
+        ASSERT_TRUE(w.movingMaterials == detail::countMovingMaterials(w.bodies.moving, w.shapes)) << "after op " << op;
+    };
+    for (int op = 0; op < 400; ++op) {
+        const int what = pick(rng);
+        if (what < 4 || bodies.empty()) {
+            BodyDef def;
+            def.shape = what % 2 ? ball : box;
+            def.type = what == 3 ? BodyType::Kinematic : BodyType::Dynamic;
+            def.material = {float(pick(rng) % 2) * 0.5f, float(pick(rng) % 2) * 0.5f, 1000.0f};
+            def.linearDamping = pick(rng) == 0 ? 0.1f : 0.0f;
+            def.gravityScale = pick(rng) == 0 ? 0.0f : 1.0f;
+            def.position = {float(op), 0, 0};
+            bodies.push_back(world.createBody(def));
+        } else if (what < 6) {
+            const std::size_t k = std::size_t(pick(rng)) % bodies.size();
+            world.destroyBody(bodies[k]);
+            bodies.erase(bodies.begin() + std::ptrdiff_t(k));
+        } else {
+            world.setMaterial(bodies[std::size_t(pick(rng)) % bodies.size()],
+                              {float(pick(rng) % 2) * 0.3f, float(pick(rng) % 2) * 0.3f, 500.0f});
+        }
+        check(op);
+        if (::testing::Test::HasFatalFailure()) return;
+        if (op % 50 == 0) world.step(1.0f / 60);
+    }
 }

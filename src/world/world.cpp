@@ -192,6 +192,7 @@ BodyId World::createBody(const BodyDef& def) {
     const Vec3 com = def.position + rotate(q, {m.lcx[i], m.lcy[i], m.lcz[i]});
     m.px[i] = com.x, m.py[i] = com.y, m.pz[i] = com.z;
     w.shapeUsers[def.shape.index] += 1;
+    w.movingMaterials.count(m, i, w.shapes, 1);
     w.effectsDirty = true;
     return id;
 }
@@ -204,7 +205,10 @@ void World::destroyBody(BodyId id) {
     w.shapeUsers[shape] -= 1;
     w.countEventFlags(moving ? w.bodies.moving.flags[slot.dense] : w.bodies.statics.flags[slot.dense], -1);
     // What rested on the body falls: its own sleeping island and the islands it touched wake.
-    if (slot.set == BodySet::Moving) w.wake(slot.dense);
+    if (slot.set == BodySet::Moving) {
+        w.wake(slot.dense);
+        w.movingMaterials.count(w.bodies.moving, slot.dense, w.shapes, -1);
+    }
     w.sleeping.wakeTouching(id.index, w.bodies, w.contactCache);
     if (slot.set == BodySet::Static) {
         w.broadPhase.staticRemoved(id.index);
@@ -401,7 +405,9 @@ void World::setMaterial(BodyId id, const Material& material) {
     } else {
         auto& b = w.bodies.moving;
         w.wake(i);
+        w.movingMaterials.count(b, i, w.shapes, -1);
         b.friction[i] = material.friction, b.restitution[i] = material.restitution, b.density[i] = material.density;
+        w.movingMaterials.count(b, i, w.shapes, 1);
         if (w.isDynamic(i)) w.setMassFromShape(i);
     }
     w.effectsDirty = true;

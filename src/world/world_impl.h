@@ -115,6 +115,7 @@ struct World::Impl {
     EffectSet effects;
     bool effectsDirty = true;
     detail::StaticMaterialCounts staticMaterials;
+    detail::MovingMaterialCounts movingMaterials;
     bool anyDamping = false;
     bool forcesPending = false;
 
@@ -206,6 +207,7 @@ struct World::Impl {
     void freeze(std::uint32_t i) {
         MovingBodies& m = bodies.moving;
         if (m.flags[i] & detail::kFlagFrozen) return;
+        movingMaterials.count(m, i, shapes, -1);
         m.flags[i] |= detail::kFlagFrozen;
         m.invMass[i] = 0;
         m.invIx[i] = m.invIy[i] = m.invIz[i] = 0;
@@ -226,7 +228,7 @@ struct World::Impl {
 
     void resolveEffectsIfDirty() {
         if (!effectsDirty) return;
-        effects = detail::resolveEffects(settings.effects, settings, bodies.moving, staticMaterials, shapes,
+        effects = detail::resolveEffects(settings.effects, settings, bodies.moving, movingMaterials, staticMaterials,
                                          joints.activeCount() > 0, anyDamping);
         effectsDirty = false;
     }
