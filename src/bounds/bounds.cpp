@@ -6,6 +6,7 @@
 #include "core/parallel.h"
 #include "simd/simd.h"
 #include "simd/vec.h"
+#include "storage/flag_scan.h"
 
 namespace rubble::detail {
 namespace {
@@ -73,11 +74,7 @@ void updateBounds(const MovingBodies& bodies, const ShapeBoundsTable& shapes, co
     const std::size_t n = bodies.size();
     out.resize(n);
     const std::uint8_t* flags = bodies.flags.data();
-    const auto allAsleep = [&](std::size_t i) {
-        std::uint8_t awake = 0;
-        for (std::size_t k = 0; k < simd::kLanes; ++k) awake |= static_cast<std::uint8_t>(~flags[i + k]);
-        return (awake & kFlagAsleep) == 0;
-    };
+    const auto allAsleep = [&](std::size_t i) { return allHave(flags + i, simd::kLanes, kFlagAsleep); };
     pool.forChunks(n, kChunkSize, [&](std::size_t, std::size_t begin, std::size_t end, int) {
         std::size_t i = begin;
         for (const std::size_t wideEnd = begin + simd::roundDownToLanes<FloatW>(end - begin); i < wideEnd;

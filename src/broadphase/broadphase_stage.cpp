@@ -9,6 +9,7 @@
 #include "broadphase/static_bvh.h"
 #include "broadphase/sweep_and_prune.h"
 #include "core/parallel.h"
+#include "storage/flag_scan.h"
 
 namespace rubble::detail {
 namespace {
@@ -220,9 +221,8 @@ void BroadPhaseStage::gatherAwake(const Bounds& moving, const MovingBodies& bodi
     const std::size_t chunks = TaskPool::chunkCount(n, kGatherChunk);
     chunkAwake_.assign(chunks + 1, 0);
     pool.forChunks(n, kGatherChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
-        std::uint32_t count = 0;
-        for (std::size_t i = begin; i < end; ++i) count += (bodies.flags[i] & kFlagAsleep) == 0;
-        chunkAwake_[c + 1] = count;
+        chunkAwake_[c + 1] =
+            static_cast<std::uint32_t>(end - begin - countWith(bodies.flags.data() + begin, end - begin, kFlagAsleep));
     });
     for (std::size_t c = 0; c < chunks; ++c) chunkAwake_[c + 1] += chunkAwake_[c];
     const std::uint32_t awake = chunkAwake_[chunks];
@@ -233,8 +233,7 @@ void BroadPhaseStage::gatherAwake(const Bounds& moving, const MovingBodies& bodi
     awakeSlot_.resize(awake);
     pool.forChunks(n, kGatherChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
         std::uint32_t at = chunkAwake_[c];
-        for (std::size_t i = begin; i < end; ++i) {
-            if (bodies.flags[i] & kFlagAsleep) continue;
+        for (std::size_t i = begin; (i = nextWithout(bodies.flags.data(), i, end, kFlagAsleep)) < end; ++i) {
             awake_[at] = static_cast<std::uint32_t>(i);
             awakeBounds_.minX[at] = moving.minX[i], awakeBounds_.minY[at] = moving.minY[i];
             awakeBounds_.minZ[at] = moving.minZ[i], awakeBounds_.maxX[at] = moving.maxX[i];

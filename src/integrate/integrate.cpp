@@ -28,6 +28,7 @@
 #include "rubble/limits.h"
 #include "simd/simd.h"
 #include "simd/vec.h"
+#include "storage/flag_scan.h"
 
 namespace rubble::detail {
 namespace {
@@ -361,8 +362,7 @@ void runRange(std::size_t begin, std::size_t end, bool wide, const std::uint8_t*
         const std::size_t wideEnd = begin + simd::roundDownToLanes<FloatW>(end - begin);
         for (; i < wideEnd; i += simd::kLanes) {
             if (asleep != nullptr) {
-                std::size_t sleepers = 0;
-                for (std::size_t k = 0; k < simd::kLanes; ++k) sleepers += (asleep[i + k] & kFlagAsleep) != 0;
+                const std::size_t sleepers = countWith(asleep + i, simd::kLanes, kFlagAsleep);
                 if (sleepers == simd::kLanes) continue;
                 if (sleepers != 0) {
                     for (std::size_t k = 0; k < simd::kLanes; ++k) scalar(i + k);

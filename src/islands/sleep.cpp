@@ -4,6 +4,7 @@
 #include <atomic>
 
 #include "core/parallel.h"
+#include "storage/flag_scan.h"
 
 namespace rubble::detail {
 namespace {
@@ -138,8 +139,7 @@ void SleepingIslands::fallAsleep(const Islands& islands, const Contacts& contact
     pool.forChunks(m.size(), kBodyChunk, [&](std::size_t c, std::size_t begin, std::size_t end, int) {
         std::vector<std::uint32_t>& lone = chunkLone_[c];
         lone.clear();
-        for (std::size_t i = begin; i < end; ++i) {
-            if (m.flags[i] & kFlagAsleep) continue;
+        for (std::size_t i = begin; (i = nextWithout(m.flags.data(), i, end, kFlagAsleep)) < end; ++i) {
             const std::uint32_t island = islands.islandOf[i];
             const bool alone = island == kNoIsland;
             if (alone && !joinsIslands(m.flags[i])) continue;

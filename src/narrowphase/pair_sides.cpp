@@ -5,6 +5,7 @@
 #include "core/parallel.h"
 #include "shapes/shape_extents.h"
 #include "simd/transpose.h"
+#include "storage/flag_scan.h"
 
 namespace rubble::detail {
 
@@ -80,8 +81,7 @@ void MovingRows::write(const MovingBodies& m, const CandidatePairs& candidates, 
     for (const BodyPair& p : candidates.statics) mark(p.a);
     for (const MeshPair& p : candidates.meshes) mark(p.moving);
     pool.forChunks(n, kMarkScanChunk, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-        for (std::size_t i = begin; i < end; ++i) {
-            if (!inPair_[i]) continue;
+        for (std::size_t i = begin; (i = nextWith(inPair_.data(), i, end, 1)) < end; ++i) {
             inPair_[i] = 0;
             writeRows(m, i, i + 1);
         }
