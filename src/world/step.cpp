@@ -138,7 +138,9 @@ void findContacts(World::Impl& w, StepContext& step) {
         // The sleepers' boxes hold while their rows and the parameters stay as they were at the last call; those
         // that fell asleep since are computed anew (velocity zero), those that woke are computed with the awake.
         const detail::SleepingIslands::Changes changes = w.sleeping.sleepChanges();
+        // (Past an eighth of the rows, one wide pass beats recomputing the changed rows one by one.)
         const bool keepSleepers = w.sleeping.sleepingBodies() > 0 && !changes.all &&
+                                  changes.slots.size() <= w.bodies.moving.size() / 8 &&
                                   w.boundsRowMoves == w.bodies.movingRowMoves() && w.boundsParams.dt == params.dt &&
                                   w.boundsParams.margin == params.margin;
         detail::updateBounds(w.bodies.moving, w.shapeBounds, params, step.pool, w.movingBounds, keepSleepers);
