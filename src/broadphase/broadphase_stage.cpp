@@ -182,7 +182,6 @@ const StaticBvh& BroadPhaseStage::staticBvh(TaskPool& pool) {
 void BroadPhaseStage::syncSleepers(const Bounds& moving, const BodyStorage& storage, SleepChanges changes,
                                    TaskPool& pool) {
     const auto& slots = storage.slots();
-    const MovingBodies& bodies = storage.moving;
     if (sleeperSlot_.size() < slots.size()) sleeperSlot_.resize(slots.size(), 0);
     changedSlots_.clear();
     if (changes.all) {
@@ -201,9 +200,8 @@ void BroadPhaseStage::syncSleepers(const Bounds& moving, const BodyStorage& stor
             sleeperSlot_[slot] = 0;
             --sleeperCount_;
         }
-        if (!storage.alive(slot) || slots[slot].set != BodySet::Moving) continue;
-        const std::uint32_t i = slots[slot].dense;
-        if ((bodies.flags[i] & kFlagAsleep) == 0) continue;
+        const std::uint32_t i = storage.sleepingRow(slot);
+        if (i == ~0u) continue;
         const Aabb box{{moving.minX[i], moving.minY[i], moving.minZ[i]},
                        {moving.maxX[i], moving.maxY[i], moving.maxZ[i]}};
         fellAsleep_.push_back({box, slot, kWholeBody});

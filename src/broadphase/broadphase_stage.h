@@ -82,18 +82,11 @@ public:
     /// A static body's collision filter changed.
     void staticFilterChanged(std::uint32_t slot, std::uint32_t category, std::uint32_t mask);
 
-    /// The moving bodies that fell asleep or woke since the last findPairs (slots, any order, repeats allowed), or
-    /// `all` when the list overflowed (SleepingIslands::sleepChanges()).
-    struct SleepChanges {
-        std::span<const std::uint32_t> slots;
-        bool all = false;
-    };
-
     /// Candidate pairs for this step: moving-moving pairs from SAP or the grid over the awake bodies, and from a
     /// tree of the sleeping bodies' boxes for awake against asleep; moving-static pairs from the static BVH.
-    /// `sleepChanges` keeps the tree of sleepers current. A world that sleeps costs the search only its awake bodies:
-    /// sleepers are in the tree, built as they fall asleep (a static BVH of their own: the same incremental forest),
-    /// and a pair of two sleepers is never a candidate anyway.
+    /// `sleepChanges` (since the last call) keeps the tree of sleepers current. A world that sleeps costs the search
+    /// only its awake bodies: sleepers are in the tree, built as they fall asleep (a static BVH of their own: the same
+    /// incremental forest), and a pair of two sleepers is never a candidate anyway.
     void findPairs(const Bounds& moving, const BodyStorage& storage, BroadPhaseKind requested,
                    SleepChanges sleepChanges, TaskPool& pool, CandidatePairs& out);
     /// Sleeping bodies in the broad phase's tree of sleepers.

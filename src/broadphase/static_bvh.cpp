@@ -944,15 +944,6 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
         out.bodyPairs.clear();
         out.meshPairs.clear();
         out.triangles.clear();
-        // A chunk of sleepers has no pairs (a sleeper against a static is never one) and keeps no hits, so that a
-        // world that sleeps costs a flag a body here: when one of them wakes, the chunk looks again.
-        bool anyAwake = false;
-        for (auto i = std::uint32_t(begin); i < end && !anyAwake; ++i) anyAwake = !filter.moving.asleep(i);
-        if (!anyAwake) {
-            out.keptBegin = out.keptEnd = 0;
-            out.keptDropped = 0;
-            return;
-        }
         const bool keptValid = out.keptGeneration == generation_ && out.keptBegin == begin && out.keptEnd == end;
         out.grown.resize(end - begin);
         out.keptStart.resize(end - begin + 1);
@@ -994,7 +985,6 @@ void StaticBvh::query(const Bounds& moving, const StaticQueryFilter& filter, Tas
         for (auto i = std::uint32_t(begin); i < end; ++i) {
             const std::size_t local = i - begin;
             const bool asleep = mf.asleep(i);  // asleep vs static (which counts as asleep) is never a pair
-            if (asleep && !rewrite) continue;  // a world that sleeps costs a flag a sleeper
             const Aabb box = boxOf(i);
             const KeptHit* list = out.kept.data() + out.keptStart[local];
             std::size_t listSize = out.keptStart[local + 1] - out.keptStart[local];

@@ -243,11 +243,7 @@ void SleepingIslands::wake(std::uint32_t dense, BodyStorage& storage) {
 }
 
 void SleepingIslands::indexSleepingPartners(const BodyStorage& storage, const ContactCache& cache) {
-    const auto& slots = storage.slots();
-    const auto asleep = [&](std::uint32_t slot) {
-        return storage.alive(slot) && slots[slot].set == BodySet::Moving &&
-               (storage.moving.flags[slots[slot].dense] & kFlagAsleep) != 0;
-    };
+    const auto asleep = [&](std::uint32_t slot) { return storage.sleepingRow(slot) != ~0u; };
     sleepingPartners_.clear();
     const auto add = [&](std::uint32_t a, std::uint32_t b) {
         if (asleep(b)) sleepingPartners_.emplace_back(a, b);

@@ -59,14 +59,9 @@ public:
     void flushWarmStarts(ContactCache& cache);
 
     std::uint32_t sleepingBodies() const { return sleepingBodies_; }
-    /// The bodies (slots) that fell asleep or woke since the last clearSleepChanges(), in no order and possibly
-    /// repeated, for the broad phase's tree of sleepers; `all` when there were too many to list (then look at every
-    /// body).
-    struct Changes {
-        std::span<const std::uint32_t> slots;
-        bool all = false;
-    };
-    Changes sleepChanges() const { return {changedSlots_, changesOverflowed_}; }
+    /// The bodies that fell asleep or woke since the last clearSleepChanges(), for the broad phase's tree of sleepers
+    /// and the sleepers' kept boxes.
+    SleepChanges sleepChanges() const { return {changedSlots_, changesOverflowed_}; }
     void clearSleepChanges() {
         changedSlots_.clear();
         changesOverflowed_ = false;

@@ -3,6 +3,7 @@
 // sets so that static bodies cost nothing in the per-step passes and static-static pairs cannot arise.
 // A slot map turns BodyId (slot index + generation) into a dense index; removal swaps the last body into the hole.
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -85,6 +86,13 @@ struct BodySlot {
     BodySet set = BodySet::Moving;
 };
 
+/// The moving bodies that fell asleep or woke since some point (slots, any order, repeats allowed), or `all` when
+/// there were too many to list: what the sleep stage tells the stages that keep state about sleepers.
+struct SleepChanges {
+    std::span<const std::uint32_t> slots;
+    bool all = false;
+};
+
 /// The slot map plus both sets.
 class BodyStorage {
 public:
@@ -100,6 +108,12 @@ public:
     /// Where each slot's body lives, by slot (meaningful while alive(slot)).
     const std::vector<BodySlot>& slots() const { return slots_; }
     bool alive(std::uint32_t slot) const { return ids_.alive(slot); }
+    /// The dense row of the moving body in `slot` when one lives there and sleeps, else ~0u.
+    std::uint32_t sleepingRow(std::uint32_t slot) const {
+        if (!alive(slot) || slots_[slot].set != BodySet::Moving) return ~0u;
+        const std::uint32_t i = slots_[slot].dense;
+        return (moving.flags[i] & kFlagAsleep) != 0 ? i : ~0u;
+    }
     /// The handle of the body in `slot` (its last body when the slot is free).
     BodyId idAt(std::uint32_t slot) const { return ids_.idAt(slot); }
     /// Counts additions, removals and reorders: while it stays the same, every dense index names the same body.

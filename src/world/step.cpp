@@ -137,7 +137,7 @@ void findContacts(World::Impl& w, StepContext& step) {
         const detail::BoundsParams params{step.dt, w.settings.contactMargin};
         // The sleepers' boxes hold while their rows and the parameters stay as they were at the last call; those
         // that fell asleep since are computed anew (velocity zero), those that woke are computed with the awake.
-        const detail::SleepingIslands::Changes changes = w.sleeping.sleepChanges();
+        const detail::SleepChanges changes = w.sleeping.sleepChanges();
         // (Past an eighth of the rows, one wide pass beats recomputing the changed rows one by one.)
         const bool keepSleepers = w.sleeping.sleepingBodies() > 0 && !changes.all &&
                                   changes.slots.size() <= w.bodies.moving.size() / 8 &&
@@ -146,11 +146,8 @@ void findContacts(World::Impl& w, StepContext& step) {
         detail::updateBounds(w.bodies.moving, w.shapeBounds, params, step.pool, w.movingBounds, keepSleepers);
         if (keepSleepers) {
             w.fellAsleepRows.clear();
-            const auto& slots = w.bodies.slots();
             for (const std::uint32_t slot : changes.slots)
-                if (w.bodies.alive(slot) && slots[slot].set == detail::BodySet::Moving &&
-                    (w.bodies.moving.flags[slots[slot].dense] & detail::kFlagAsleep))
-                    w.fellAsleepRows.push_back(slots[slot].dense);
+                if (const std::uint32_t row = w.bodies.sleepingRow(slot); row != ~0u) w.fellAsleepRows.push_back(row);
             detail::updateBoundsOf(w.bodies.moving, w.shapeBounds, params, w.fellAsleepRows, w.movingBounds);
         }
         w.boundsRowMoves = w.bodies.movingRowMoves();
@@ -158,8 +155,7 @@ void findContacts(World::Impl& w, StepContext& step) {
     }
     {
         const auto timer = step.time(Stage::BroadPhase);
-        const detail::SleepingIslands::Changes changes = w.sleeping.sleepChanges();
-        w.broadPhase.findPairs(w.movingBounds, w.bodies, w.settings.broadPhase, {changes.slots, changes.all}, step.pool,
+        w.broadPhase.findPairs(w.movingBounds, w.bodies, w.settings.broadPhase, w.sleeping.sleepChanges(), step.pool,
                                w.pairs);
         w.sleeping.clearSleepChanges();
     }
